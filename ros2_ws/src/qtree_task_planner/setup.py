@@ -1,0 +1,28 @@
+import os
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'qtree_task_planner'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    package_data={package_name: ['resources/*/*']},
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='qtree-tamp developers',
+    maintainer_email='dev@qtree-tamp.example',
+    description='Q-Tree task planner (tree-based Q-learning over sequences of relocated objects), served as qtree_msgs/action/RetrieveTarget.',
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+            'task_planner_node = qtree_task_planner.task_planner_node:main',
+        ],
+    },
+)
