@@ -1,1 +1,1 @@
-"""Kinova Jaco2 7-DoF model (URDF, Pinocchio, FCL), kinematic simulator node and the scenarios of the paper."""
+"""Kinova Jaco² 7-DoF model (URDF, Pinocchio, FCL), kinematic simulator and scenarios."""

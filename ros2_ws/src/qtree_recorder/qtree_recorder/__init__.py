@@ -1,1 +1,1 @@
-"""Records every topic of the qtree-tamp graph to MCAP (rosbag2 conventions) and to Rerun; offline replay."""
+"""Recording of the qtree-tamp graph to MCAP (rosbag2 conventions) and Rerun; replay."""

@@ -1,1 +1,1 @@
-"""Cartesian sampling planner with a Set-based Task-Priority IK check, served as qtree_msgs/srv/RelocateObject."""
+"""Cartesian sampling planner with a Set-based Task-Priority IK (STPIK) check."""
