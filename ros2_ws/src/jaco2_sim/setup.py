@@ -14,7 +14,10 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
         (os.path.join('share', package_name, 'urdf'), glob('jaco2_sim/resources/urdf/*')),
-        (os.path.join('share', package_name, 'scenarios'), glob('jaco2_sim/resources/scenarios/*')),
+        (
+            os.path.join('share', package_name, 'scenarios'),
+            glob('jaco2_sim/resources/scenarios/*'),
+        ),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

@@ -58,6 +58,8 @@ class Scenario:
         drop_zone_size: full size of the drop zone [m].
         home: arm home configuration, 7 joint angles [rad] (Kinova convention).
         description: free text.
+        source: file the scenario was loaded from ('' if built in code).
+        robot_keepout_radius: no object footprint within this distance of the base axis [m].
     """
 
     name: str
@@ -67,6 +69,7 @@ class Scenario:
     home: tuple[float, ...]
     description: str = ''
     source: str = field(default='', compare=False)
+    robot_keepout_radius: float = 0.2
 
     @property
     def target(self) -> ObjectSpec:
@@ -86,7 +89,7 @@ class Scenario:
     @property
     def movable_ids(self) -> tuple[str, ...]:
         """Ids of the obstacles then the target: the paper's action set a_1..a_No, a_T."""
-        return tuple(o.id for o in self.obstacles) + (self.target.id,)
+        return (*(o.id for o in self.obstacles), self.target.id)
 
     def object(self, object_id: str) -> ObjectSpec:
         """The object named ``object_id``.

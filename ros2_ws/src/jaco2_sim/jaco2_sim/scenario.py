@@ -1,0 +1,322 @@
+"""Scenario files: YAML → validated :class:`~jaco2_sim.scene.Scenario`, and a seeded generator.
+
+World frame = robot base frame (``j2s7s300_link_base`` at the origin, z up). The table is a static
+box whose top face is at z = 0; every object stands on it (centre z = height / 2).
+
+YAML schema (lengths [m], angles [rad]; unknown keys are errors)::
+
+    name: s1                        # required, non-empty string
+    description: free text          # optional
+    home: [4.71, 2.84, 0.0, 0.75, 4.62, 4.48, 4.88]   # optional, 7 arm angles within limits
+    robot_keepout_radius: 0.2       # optional (default 0.2): no footprint within this radius of
+                                    #   the base axis (x = y = 0)
+    table:                          # required, becomes the static box object 'table'
+      center_xy: [0.35, 0.0]        # centre of the table top
+      size: [1.2, 1.4, 0.05]        # full edges x, y, z (> 0); top face at z = 0
+    drop_zone:                      # required: where relocated objects are placed
+      center_xy: [0.0, 0.5]         # on the table: centre z = size[2] / 2
+      size: [0.3, 0.3, 0.3]
+    objects:                        # required, non-empty list, ids unique (and not 'table')
+      - id: T                       # required, non-empty string
+        role: target                # target | obstacle | static; exactly one target
+        shape: cylinder             # cylinder | box
+        xy: [0.7, 0.0]              # footprint centre, inside the table top
+        radius: 0.03                # cylinder only, > 0
+        height: 0.15                # cylinder only, > 0
+        size: [0.1, 0.1, 0.1]       # box only, each > 0
+        yaw: 0.0                    # optional, default 0
+
+Validation also rejects NaN/inf anywhere, objects whose footprints overlap each other or the
+drop zone, and objects or a drop zone inside the robot keep-out disc. Every error is a
+:class:`ScenarioError` naming the file, the field (``objects[2].radius``) and the problem.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+from collections.abc import Callable
+from typing import Any
+
+import yaml
+
+from jaco2_sim.exceptions import ScenarioError
+from jaco2_sim.footprint import Footprint, footprint_of, overlap
+from jaco2_sim.model import HOME, arm_limits
+from jaco2_sim.scene import ObjectSpec, Scenario
+
+TABLE_ID = 'table'
+DEFAULT_KEEPOUT = 0.2  # [m]
+SCENARIO_DIR = pathlib.Path(__file__).resolve().parent / 'resources' / 'scenarios'
+_TOP = {'name', 'description', 'home', 'robot_keepout_radius', 'table', 'drop_zone', 'objects'}
+_BOX = {'center_xy', 'size'}
+_OBJECT = {'id', 'role', 'shape', 'xy', 'radius', 'height', 'size', 'yaw'}
+_SHAPE_KEYS = {'cylinder': {'radius', 'height'}, 'box': {'size'}}
+
+
+def list_scenarios() -> list[str]:
+    """Names of the installed scenarios (file stems), sorted, e.g. ``['s1', 's2', 's3']``."""
+    return sorted(p.stem for p in SCENARIO_DIR.glob('*.yaml'))
+
+
+def resolve_scenario(name_or_path: str) -> pathlib.Path:
+    """File of an installed scenario name, or ``name_or_path`` itself if it is a file.
+
+    Raises:
+        ScenarioError: neither an installed name nor an existing file.
+    """
+    if name_or_path in list_scenarios():
+        return SCENARIO_DIR / f'{name_or_path}.yaml'
+    path = pathlib.Path(name_or_path).expanduser()
+    if path.is_file():
+        return path
+    known = ', '.join(list_scenarios())
+    raise ScenarioError(name_or_path, '', f'no such scenario or file (installed: {known})')
+
+
+def load_scenario(name_or_path: str) -> Scenario:
+    """Load and validate a scenario by installed name (``'s1'``) or YAML path.
+
+    Raises:
+        ScenarioError: unreadable file, bad YAML, or a schema / geometry violation.
+    """
+    path = resolve_scenario(name_or_path)
+    try:
+        data = yaml.safe_load(path.read_text(encoding='utf-8'))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
+        raise ScenarioError(str(path), '', f'cannot read YAML: {err}') from None
+    return parse_scenario(data, source=str(path))
+
+
+def parse_scenario(data: Any, source: str = '') -> Scenario:
+    """Build and validate a scenario from the YAML mapping ``data`` (see module docstring).
+
+    Raises:
+        ScenarioError: schema or geometry violation.
+    """
+    fail = _failer(source)
+    if not isinstance(data, dict):
+        fail('', f'top level must be a mapping, got {type(data).__name__}')
+    _check_keys(data, _TOP, {'name', 'table', 'drop_zone', 'objects'}, '', fail)
+    name = _string(data['name'], 'name', fail)
+    table_xy = _vector(
+        _get(data['table'], 'center_xy', 'table', _BOX, fail), 2, 'table.center_xy', fail
+    )
+    table_size = _vector(data['table']['size'], 3, 'table.size', fail, positive=True)
+    zone_xy = _vector(
+        _get(data['drop_zone'], 'center_xy', 'drop_zone', _BOX, fail),
+        2,
+        'drop_zone.center_xy',
+        fail,
+    )
+    zone_size = _vector(data['drop_zone']['size'], 3, 'drop_zone.size', fail, positive=True)
+    home = _vector(data.get('home', HOME.tolist()), 7, 'home', fail)
+    keepout = _number(
+        data.get('robot_keepout_radius', DEFAULT_KEEPOUT), 'robot_keepout_radius', fail
+    )
+    if not isinstance(data['objects'], list) or not data['objects']:
+        fail('objects', 'must be a non-empty list')
+    objects = [_parse_object(o, f'objects[{i}]', fail) for i, o in enumerate(data['objects'])]
+    table = ObjectSpec(
+        id=TABLE_ID,
+        role='static',
+        shape='box',
+        position=(table_xy[0], table_xy[1], -table_size[2] / 2),
+        size=tuple(table_size),
+    )
+    scenario = Scenario(
+        name=name,
+        objects=(*objects, table),
+        drop_zone_center=(zone_xy[0], zone_xy[1], zone_size[2] / 2),
+        drop_zone_size=tuple(zone_size),
+        home=tuple(home),
+        description=str(data.get('description', '')),
+        source=source,
+        robot_keepout_radius=keepout,
+    )
+    validate_scenario(scenario)
+    return scenario
+
+
+def validate_scenario(scenario: Scenario) -> None:
+    """Check the geometry and roles of a scenario built in code or from a file.
+
+    Raises:
+        ScenarioError: see the module docstring for the rules.
+    """
+    fail = _failer(scenario.source or scenario.name)
+    movable = [(i, o) for i, o in enumerate(scenario.objects) if o.id != TABLE_ID]
+    seen: dict[str, int] = {}
+    for i, obj in enumerate(scenario.objects):
+        if obj.id in seen:
+            fail(f'objects[{i}].id', f'duplicate id {obj.id!r} (also objects[{seen[obj.id]}])')
+        seen[obj.id] = i
+    targets = [f'objects[{i}]' for i, o in movable if o.role == 'target']
+    if len(targets) != 1:
+        fail('objects', f'exactly one object must have role target, found {len(targets)}')
+    if TABLE_ID not in seen:
+        fail('table', 'missing')
+    table = scenario.object(TABLE_ID)
+    if not all(math.isfinite(v) and v > 0 for v in scenario.drop_zone_size):
+        fail('drop_zone.size', f'must be positive and finite, got {scenario.drop_zone_size}')
+    if not (math.isfinite(scenario.robot_keepout_radius) and scenario.robot_keepout_radius >= 0):
+        fail('robot_keepout_radius', f'must be ≥ 0, got {scenario.robot_keepout_radius}')
+    limits = arm_limits()
+    for k, (value, lo, hi) in enumerate(
+        zip(scenario.home, limits.lower, limits.upper, strict=True)
+    ):
+        if not (math.isfinite(value) and lo <= value <= hi):
+            fail(f'home[{k}]', f'{value} rad outside the joint limits [{lo:.4f}, {hi:.4f}]')
+    table_fp = footprint_of(table)
+    zone = Footprint(
+        center=scenario.drop_zone_center[:2],
+        half_size=(scenario.drop_zone_size[0] / 2, scenario.drop_zone_size[1] / 2),
+    )
+    _check_on_table_and_clear(zone, 'drop_zone', table_fp, scenario.robot_keepout_radius, fail)
+    footprints = []
+    for i, obj in movable:
+        fp = footprint_of(obj)
+        _check_on_table_and_clear(
+            fp, f'objects[{i}]', table_fp, scenario.robot_keepout_radius, fail
+        )
+        if overlap(fp, zone):
+            fail(f'objects[{i}].xy', f'{obj.id!r} overlaps the drop zone')
+        for j, other in footprints:
+            if overlap(fp, other):
+                fail(f'objects[{i}].xy', f'{obj.id!r} overlaps {scenario.objects[j].id!r}')
+        footprints.append((i, fp))
+
+
+def _check_on_table_and_clear(
+    fp: Footprint, field: str, table: Footprint, keepout: float, fail: Callable[..., Any]
+) -> None:
+    if table.distance_to_point(fp.center) > 0.0:
+        fail(f'{field}', f'centre {fp.center} is not on the table')
+    clearance = fp.distance_to_point((0.0, 0.0))
+    if clearance < keepout:
+        fail(
+            f'{field}', f'{clearance:.3f} m from the robot base axis, keep-out radius {keepout} m'
+        )
+
+
+def _parse_object(data: Any, field: str, fail: Callable[..., Any]) -> ObjectSpec:
+    if not isinstance(data, dict):
+        fail(field, f'must be a mapping, got {type(data).__name__}')
+    _check_keys(data, _OBJECT, {'id', 'role', 'shape', 'xy'}, f'{field}.', fail)
+    object_id = _string(data['id'], f'{field}.id', fail)
+    if object_id == TABLE_ID:
+        fail(f'{field}.id', f'{TABLE_ID!r} is reserved for the table')
+    role = data['role']
+    if role not in ('target', 'obstacle', 'static'):
+        fail(f'{field}.role', f'must be target, obstacle or static, got {role!r}')
+    shape = data['shape']
+    if shape not in _SHAPE_KEYS:
+        fail(f'{field}.shape', f'must be cylinder or box, got {shape!r}')
+    wrong = sorted((_SHAPE_KEYS['box'] | _SHAPE_KEYS['cylinder']) - _SHAPE_KEYS[shape] & set(data))
+    if wrong:
+        fail(f'{field}.{wrong[0]}', f'not allowed for a {shape}')
+    for key in sorted(_SHAPE_KEYS[shape] - set(data)):
+        fail(f'{field}.{key}', f'missing (required for a {shape})')
+    xy = _vector(data['xy'], 2, f'{field}.xy', fail)
+    yaw = _number(data.get('yaw', 0.0), f'{field}.yaw', fail)
+    if shape == 'cylinder':
+        radius = _number(data['radius'], f'{field}.radius', fail, positive=True)
+        height = _number(data['height'], f'{field}.height', fail, positive=True)
+        position = (xy[0], xy[1], height / 2)
+        return ObjectSpec(object_id, role, 'cylinder', position, yaw, radius=radius, height=height)
+    size = _vector(data['size'], 3, f'{field}.size', fail, positive=True)
+    position = (xy[0], xy[1], size[2] / 2)
+    return ObjectSpec(object_id, role, 'box', position, yaw, size=tuple(size))
+
+
+def _failer(source: str) -> Callable[..., Any]:
+    def fail(field: str, problem: str) -> None:
+        raise ScenarioError(source, field, problem)
+
+    return fail
+
+
+def _check_keys(
+    data: dict, allowed: set, required: set, prefix: str, fail: Callable[..., Any]
+) -> None:
+    for key in data:
+        if key not in allowed:
+            fail(f'{prefix}{key}', f'unknown key (allowed: {", ".join(sorted(allowed))})')
+    for key in sorted(required - set(data)):
+        fail(f'{prefix}{key}', 'missing')
+
+
+def _get(section: Any, key: str, name: str, allowed: set, fail: Callable[..., Any]) -> Any:
+    if not isinstance(section, dict):
+        fail(name, f'must be a mapping, got {type(section).__name__}')
+    _check_keys(section, allowed, allowed, f'{name}.', fail)
+    return section[key]
+
+
+def _number(value: Any, field: str, fail: Callable[..., Any], positive: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        fail(field, f'must be a number, got {value!r}')
+    if not math.isfinite(value):
+        fail(field, f'must be finite, got {value}')
+    if positive and value <= 0:
+        fail(field, f'must be > 0, got {value}')
+    return float(value)
+
+
+def _vector(
+    value: Any, n: int, field: str, fail: Callable[..., Any], positive: bool = False
+) -> list[float]:
+    if not isinstance(value, (list, tuple)) or len(value) != n:
+        fail(field, f'must be a list of {n} numbers, got {value!r}')
+    return [_number(v, f'{field}[{k}]', fail, positive) for k, v in enumerate(value)]
+
+
+def _string(value: Any, field: str, fail: Callable[..., Any]) -> str:
+    if not isinstance(value, str) or not value.strip():
+        fail(field, f'must be a non-empty string, got {value!r}')
+    return value
+
+
+def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
+    """The YAML mapping of ``scenario`` (inverse of :func:`parse_scenario`)."""
+    table = scenario.object(TABLE_ID)
+    objects = []
+    for obj in scenario.objects:
+        if obj.id == TABLE_ID:
+            continue
+        entry: dict[str, Any] = {'id': obj.id, 'role': obj.role, 'shape': obj.shape}
+        entry['xy'] = [float(obj.position[0]), float(obj.position[1])]
+        if obj.shape == 'cylinder':
+            entry |= {'radius': float(obj.radius), 'height': float(obj.height)}
+        else:
+            entry['size'] = [float(v) for v in obj.size]
+        if obj.yaw:
+            entry['yaw'] = float(obj.yaw)
+        objects.append(entry)
+    return {
+        'name': scenario.name,
+        'description': scenario.description,
+        'home': [float(v) for v in scenario.home],
+        'robot_keepout_radius': float(scenario.robot_keepout_radius),
+        'table': {
+            'center_xy': [float(table.position[0]), float(table.position[1])],
+            'size': [float(v) for v in table.size],
+        },
+        'drop_zone': {
+            'center_xy': [float(v) for v in scenario.drop_zone_center[:2]],
+            'size': [float(v) for v in scenario.drop_zone_size],
+        },
+        'objects': objects,
+    }
+
+
+def dump_scenario(scenario: Scenario) -> str:
+    """YAML text of ``scenario``; :func:`parse_scenario` of it gives back an equal scenario."""
+    return yaml.safe_dump(scenario_to_dict(scenario), sort_keys=False, default_flow_style=None)
+
+
+def generate_clutter(n_objects: int, density: float, seed: int, **options: Any) -> Scenario:
+    """Seeded random clutter; see :func:`jaco2_sim.generator.generate_clutter`."""
+    from jaco2_sim.generator import generate_clutter as generate
+
+    return generate(n_objects, density, seed, **options)

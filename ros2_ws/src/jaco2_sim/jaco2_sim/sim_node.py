@@ -1,0 +1,229 @@
+"""``jaco2_sim`` node: kinematic Jaco² simulator (joint states, scene, grasp attach/detach).
+
+Thin ROS wrapper around :class:`~jaco2_sim.integrator.JointIntegrator` and
+:class:`~jaco2_sim.world.World`; see DESIGN.md for the graph contract.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import rclpy
+from qtree_msgs.msg import Scene
+from qtree_msgs.srv import AttachObject, ResetScene
+from rcl_interfaces.msg import (
+    FloatingPointRange,
+    ParameterDescriptor,
+    SetParametersResult,
+)
+from rclpy.exceptions import InvalidParameterValueException, ParameterUninitializedException
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+from trajectory_msgs.msg import JointTrajectory
+
+from jaco2_sim.conversions import STATUS_NAMES, joint_state_msg, scene_msg, trajectory_arrays
+from jaco2_sim.exceptions import Jaco2SimError
+from jaco2_sim.integrator import JointIntegrator
+from jaco2_sim.model import FINGER_JOINTS, Jaco2Model, urdf_text
+from jaco2_sim.scenario import load_scenario
+from jaco2_sim.world import World
+
+LATCHED_QOS = QoSProfile(  # /scene and /robot_description
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+STATE_QOS = QoSProfile(depth=10)  # /joint_states: reliable, volatile
+TRAJECTORY_QOS = QoSProfile(depth=10)  # /joint_trajectory
+ATTACH_DISTANCE_WARN = 0.25  # attach farther than this from the EE origin is suspicious [m]
+
+
+def _descriptor(
+    text: str, lo: float | None = None, hi: float | None = None, **kw
+) -> ParameterDescriptor:
+    ranges = [FloatingPointRange(from_value=lo, to_value=hi)] if lo is not None else []
+    return ParameterDescriptor(description=text, floating_point_range=ranges, **kw)
+
+
+# (name, default, (description, min, max)); robot_description (read-only URDF) is added on top.
+PARAMETERS = [
+    ('scenario', 's1', ('scenario name (s1, s2, s3) or YAML path',)),
+    ('sim_rate_hz', 100.0, ('integration and /joint_states rate [Hz]', 1.0, 1000.0)),
+    ('scene_rate_hz', 10.0, ('max /scene rate while an object moves [Hz]', 0.1, 100.0)),
+    ('finger_angle_rad', 0.2, ('proximal finger joint angle [rad]', 0.0, 1.51)),
+    ('initial_configuration', Parameter.Type.DOUBLE_ARRAY, ('7 arm angles [rad]; unset = home',)),
+]
+
+
+class Jaco2SimNode(Node):
+    """Publishes /joint_states each period, /scene on change, /robot_description once."""
+
+    def __init__(self) -> None:
+        super().__init__('jaco2_sim')
+        params = [(n, v, _descriptor(*d)) for n, v, d in PARAMETERS]
+        params.append(('robot_description', urdf_text(), _descriptor('URDF', read_only=True)))
+        self.declare_parameters('', params)
+        self.robot = Jaco2Model(self._param('finger_angle_rad'))
+        self.scenario = load_scenario(self._param('scenario'))
+        self.world = World(self.scenario)
+        q0 = self._param('initial_configuration')
+        self.sim = JointIntegrator(
+            self.robot.limits, self._param('sim_rate_hz'), self.scenario.home if q0 is None else q0
+        )
+        fingers = np.zeros(len(FINGER_JOINTS))
+        fingers[:3] = self.robot.finger_angle
+        self.fingers = fingers
+        self._scene_version = -1
+        self._last_scene_time = 0.0
+        self.add_on_set_parameters_callback(self._check_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+        self.state_pub = self.create_publisher(JointState, '/joint_states', STATE_QOS)
+        self.scene_pub = self.create_publisher(Scene, '/scene', LATCHED_QOS)
+        self.urdf_pub = self.create_publisher(String, '/robot_description', LATCHED_QOS)
+        self.create_subscription(
+            JointTrajectory, '/joint_trajectory', self._on_trajectory, TRAJECTORY_QOS
+        )
+        self.create_service(ResetScene, '~/reset_scene', self._on_reset)
+        self.create_service(AttachObject, '~/attach_object', self._on_attach)
+        self.timer = self.create_timer(self.sim.period, self._on_timer)
+        self.urdf_pub.publish(String(data=urdf_text()))
+        self._publish_scene()
+        self.get_logger().info(
+            f'jaco2_sim ready: scenario {self.scenario.name}, {1 / self.sim.period:g} Hz'
+        )
+
+    def _param(self, name: str):
+        try:
+            return self.get_parameter(name).value
+        except ParameterUninitializedException:
+            return None
+
+    def _check_parameters(self, params: list[Parameter]) -> SetParametersResult:
+        for p in params:
+            try:
+                if p.name == 'scenario':
+                    load_scenario(p.value)
+                elif p.name == 'initial_configuration' and p.value is not None:
+                    JointIntegrator(self.robot.limits, q0=np.asarray(p.value, dtype=float))
+                elif p.name == 'finger_angle_rad' and hasattr(self, 'robot'):
+                    return SetParametersResult(
+                        successful=False, reason='finger_angle_rad is fixed at start'
+                    )
+            except (Jaco2SimError, TypeError, ValueError) as err:
+                return SetParametersResult(successful=False, reason=f'{p.name}: {err}')
+        return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, params: list[Parameter]) -> None:
+        for p in params:
+            if p.name == 'scenario':
+                try:
+                    self._load(p.value)
+                except Jaco2SimError as err:
+                    self.get_logger().error(f'scenario not loaded: {err}')
+            elif p.name == 'sim_rate_hz':
+                self.timer.cancel()
+                self.destroy_timer(self.timer)
+                self.sim.period = 1.0 / p.value
+                self.timer = self.create_timer(self.sim.period, self._on_timer)
+
+    def _load(self, name: str) -> None:
+        scenario = load_scenario(name)
+        self.scenario, self.world = scenario, World(scenario)
+        self.sim.reset(np.asarray(scenario.home))
+        self._publish_scene()
+
+    def _on_timer(self) -> None:
+        if self.sim.step():
+            self.get_logger().info('trajectory finished')
+        if self.world.attached_id is not None:
+            self.world.update(self.robot.ee_pose(self.sim.q))
+        now = self.get_clock().now()
+        self.state_pub.publish(
+            joint_state_msg(now.to_msg(), self.sim.q, self.sim.velocity, self.fingers)
+        )
+        seconds = now.nanoseconds * 1e-9
+        if self.world.version != self._scene_version and (
+            seconds - self._last_scene_time >= 1.0 / self._param('scene_rate_hz')
+        ):
+            self._publish_scene()
+
+    def _publish_scene(self) -> None:
+        now = self.get_clock().now()
+        self.scene_pub.publish(scene_msg(self.world, now.to_msg()))
+        self._scene_version = self.world.version
+        self._last_scene_time = now.nanoseconds * 1e-9
+
+    def _on_trajectory(self, msg: JointTrajectory) -> None:
+        if not msg.points:
+            self.sim.cancel()
+            self.get_logger().info('empty trajectory: stopping')
+            return
+        try:
+            clamped = self.sim.set_reference(*trajectory_arrays(msg))
+        except Jaco2SimError as err:
+            self.get_logger().warning(f'trajectory rejected: {err}')
+            return
+        if clamped:
+            self.get_logger().warning('trajectory beyond the joint limits: clamped to them')
+        self.get_logger().info(f'following a trajectory of {len(msg.points)} points')
+
+    def _on_reset(self, request: ResetScene.Request, response: ResetScene.Response):
+        name = request.scenario or self.scenario.source or self.scenario.name
+        try:
+            self._load(name)
+        except Jaco2SimError as err:
+            response.success, response.message = False, str(err)
+            self.get_logger().warning(f'reset_scene failed: {err}')
+            return response
+        response.success, response.message = True, f'scenario {self.scenario.name} loaded'
+        return response
+
+    def _on_attach(self, request: AttachObject.Request, response: AttachObject.Response):
+        try:
+            if request.attach:
+                distance = self.world.attach(request.object_id, self.robot.ee_pose(self.sim.q))
+                if distance > ATTACH_DISTANCE_WARN:
+                    self.get_logger().warning(
+                        f'attached {request.object_id} {distance:.3f} m from the EE'
+                    )
+                response.message = f'{request.object_id} attached'
+            else:
+                status = STATUS_NAMES.get(
+                    request.status_after_release, f'code {request.status_after_release}'
+                )
+                self.world.detach(request.object_id, status)
+                response.message = f'{request.object_id} released ({status})'
+        except Jaco2SimError as err:
+            response.success, response.message = False, str(err)
+            return response
+        response.success = True
+        self._publish_scene()
+        return response
+
+
+def main(args: list[str] | None = None) -> None:
+    """Run the node until SIGINT (exit code 0); exit code 2 on bad start-up parameters."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = Jaco2SimNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (Jaco2SimError, InvalidParameterValueException) as err:
+        rclpy.logging.get_logger('jaco2_sim').fatal(f'cannot start: {err}')
+        sys.exit(2)
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,134 @@
+"""World state of the simulator: object poses and statuses, grasp attach/detach (no ROS).
+
+An attached object keeps the pose it had relative to the end-effector at the moment of the
+attach: transform_object_to_ee = ee_pose⁻¹ · object_pose, and after each EE motion
+object_pose = ee_pose · transform_object_to_ee. A detached object stays where it is.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from jaco2_sim.exceptions import WorldError
+from jaco2_sim.scene import ObjectSpec, Scenario, Status
+
+RELEASE_STATUSES: tuple[Status, ...] = ('in_clutter', 'relocated')
+
+
+def spec_pose(obj: ObjectSpec) -> pin.SE3:
+    """Initial pose of a scenario object (transform_object_to_world): yaw about z, centre."""
+    c, s = math.cos(obj.yaw), math.sin(obj.yaw)
+    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return pin.SE3(rotation, np.array(obj.position, dtype=float))
+
+
+@dataclass
+class ObjectState:
+    """Mutable state of one object.
+
+    Attributes:
+        spec: the scenario entry (shape, role, initial pose).
+        pose: current transform_object_to_world.
+        status: ``'in_clutter'``, ``'grasped'`` or ``'relocated'``.
+    """
+
+    spec: ObjectSpec
+    pose: pin.SE3
+    status: Status = 'in_clutter'
+
+
+class World:
+    """Objects of one scenario and the one object (at most) held by the hand.
+
+    Attributes:
+        scenario: the scenario this world was built from.
+        objects: state of every object by id, in scenario order.
+        attached_id: id of the held object, or None.
+        version: incremented on every change (attach, detach, move, reset).
+    """
+
+    def __init__(self, scenario: Scenario) -> None:
+        self.scenario = scenario
+        self.objects: dict[str, ObjectState] = {}
+        self.attached_id: str | None = None
+        self.version = 0
+        self._object_to_ee = pin.SE3.Identity()
+        self.reset()
+
+    def reset(self) -> None:
+        """Every object back to its initial pose, status ``'in_clutter'``, nothing attached."""
+        self.objects = {o.id: ObjectState(o, spec_pose(o)) for o in self.scenario.objects}
+        self.attached_id = None
+        self.version += 1
+
+    def state(self, object_id: str) -> ObjectState:
+        """State of ``object_id``.
+
+        Raises:
+            WorldError: unknown id.
+        """
+        try:
+            return self.objects[object_id]
+        except KeyError:
+            known = ', '.join(self.objects)
+            raise WorldError(f'unknown object {object_id!r} (known: {known})') from None
+
+    def attach(self, object_id: str, ee_pose: pin.SE3) -> float:
+        """Grasp ``object_id``: it keeps its current offset to the end-effector.
+
+        Args:
+            object_id: a target or obstacle id.
+            ee_pose: current transform_ee_to_world.
+
+        Returns:
+            Distance from the EE frame origin to the object centre [m] (for plausibility logs).
+
+        Raises:
+            WorldError: unknown id, static object, or an object is already attached.
+        """
+        state = self.state(object_id)
+        if self.attached_id is not None:
+            raise WorldError(f'cannot attach {object_id!r}: {self.attached_id!r} is attached')
+        if state.spec.role == 'static':
+            raise WorldError(f'cannot attach {object_id!r}: it is a static object')
+        self._object_to_ee = ee_pose.actInv(state.pose)
+        self.attached_id = object_id
+        state.status = 'grasped'
+        self.version += 1
+        return float(np.linalg.norm(self._object_to_ee.translation))
+
+    def update(self, ee_pose: pin.SE3) -> bool:
+        """Move the attached object with the end-effector (transform_ee_to_world ``ee_pose``).
+
+        Returns:
+            True if an object moved.
+        """
+        if self.attached_id is None:
+            return False
+        state = self.objects[self.attached_id]
+        new_pose = ee_pose * self._object_to_ee
+        if new_pose.isApprox(state.pose, 1e-12):
+            return False
+        state.pose = new_pose
+        self.version += 1
+        return True
+
+    def detach(self, object_id: str, status: Status = 'relocated') -> None:
+        """Release ``object_id`` where it is, with status ``'relocated'`` or ``'in_clutter'``.
+
+        Raises:
+            WorldError: unknown id, ``object_id`` not attached, or a bad status.
+        """
+        state = self.state(object_id)
+        if self.attached_id != object_id:
+            held = repr(self.attached_id) if self.attached_id else 'nothing'
+            raise WorldError(f'cannot detach {object_id!r}: it is not attached ({held} is)')
+        if status not in RELEASE_STATUSES:
+            raise WorldError(f'release status must be one of {RELEASE_STATUSES}, got {status!r}')
+        state.status = status
+        self.attached_id = None
+        self.version += 1

@@ -1,0 +1,172 @@
+"""Tests of jaco2_sim.scenario / generator / footprint: loading, validation, seeded generation."""
+
+from __future__ import annotations
+
+import copy
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from jaco2_sim.exceptions import ScenarioError
+from jaco2_sim.footprint import Footprint, overlap
+from jaco2_sim.scenario import (
+    TABLE_ID,
+    dump_scenario,
+    generate_clutter,
+    list_scenarios,
+    load_scenario,
+    parse_scenario,
+    resolve_scenario,
+)
+
+GOOD: dict[str, Any] = {
+    'name': 'tiny',
+    'table': {'center_xy': [0.35, 0.0], 'size': [1.2, 1.4, 0.05]},
+    'drop_zone': {'center_xy': [0.0, 0.5], 'size': [0.3, 0.3, 0.3]},
+    'objects': [
+        {'id': 'T', 'role': 'target', 'shape': 'cylinder', 'xy': [0.7, 0.0], 'radius': 0.03,
+         'height': 0.16},
+        {'id': 'O1', 'role': 'obstacle', 'shape': 'cylinder', 'xy': [0.55, 0.0], 'radius': 0.03,
+         'height': 0.12},
+        {'id': 'B', 'role': 'static', 'shape': 'box', 'xy': [0.6, -0.3], 'size': [0.1, 0.2, 0.3],
+         'yaw': 0.3},
+    ],
+}  # fmt: skip
+
+
+def _bad(mutate: Any) -> dict[str, Any]:
+    data = copy.deepcopy(GOOD)
+    mutate(data)
+    return data
+
+
+@pytest.mark.parametrize(('name', 'n_obstacles'), [('s1', 5), ('s2', 10), ('s3', 15)])
+def test_installed_scenarios_load(name: str, n_obstacles: int) -> None:
+    scenario = load_scenario(name)
+    assert scenario.name == name
+    assert len(scenario.obstacles) == n_obstacles
+    assert scenario.movable_ids[-1] == scenario.target.id == 'T'
+    table = scenario.object(TABLE_ID)
+    assert table.role == 'static' and table.top_z == pytest.approx(0.0)
+    target_distance = math.hypot(*scenario.target.position[:2])
+    assert all(math.hypot(*o.position[:2]) < target_distance + 0.06 for o in scenario.obstacles)
+    for obj in scenario.obstacles:
+        assert 0.35 <= obj.position[0] <= 0.75 and abs(obj.position[1]) <= 0.35
+        assert obj.position[2] == pytest.approx(obj.height / 2)
+    assert abs(scenario.drop_zone_center[1]) >= 0.4
+    assert scenario.source.endswith(f'{name}.yaml')
+
+
+def test_list_and_resolve() -> None:
+    assert {'s1', 's2', 's3'} <= set(list_scenarios())
+    with pytest.raises(ScenarioError, match='no such scenario'):
+        resolve_scenario('s9')
+
+
+def test_parse_good_and_round_trip(tmp_path: Any) -> None:
+    scenario = parse_scenario(copy.deepcopy(GOOD), source='good')
+    assert scenario.object('B').position == pytest.approx((0.6, -0.3, 0.15))
+    assert scenario.object('T').position == pytest.approx((0.7, 0.0, 0.08))
+    assert scenario.drop_zone_center == pytest.approx((0.0, 0.5, 0.15))
+    path = tmp_path / 'tiny.yaml'
+    path.write_text(dump_scenario(scenario))
+    assert load_scenario(str(path)) == scenario
+
+
+@pytest.mark.parametrize(
+    ('mutate', 'field', 'problem'),
+    [
+        (lambda d: d.update(colour='red'), 'colour', 'unknown key'),
+        (lambda d: d['objects'][0].update(mass=1.0), r'objects\[0\].mass', 'unknown key'),
+        (lambda d: d['table'].update(height=1.0), 'table.height', 'unknown key'),
+        (lambda d: d.pop('drop_zone'), 'drop_zone', 'missing'),
+        (lambda d: d['objects'][1].pop('xy'), r'objects\[1\].xy', 'missing'),
+        (lambda d: d['objects'][0].pop('radius'), r'objects\[0\].radius', 'missing'),
+        (lambda d: d['objects'][0].update(size=[1, 1, 1]), r'objects\[0\].size', 'not allowed'),
+        (lambda d: d['objects'][1].update(id='T'), r'objects\[1\].id', 'duplicate'),
+        (lambda d: d['objects'][1].update(id='table'), r'objects\[1\].id', 'reserved'),
+        (lambda d: d['objects'][0].update(radius=math.nan), r'objects\[0\].radius', 'finite'),
+        (
+            lambda d: d['objects'][1]['xy'].__setitem__(0, math.inf),
+            r'objects\[1\].xy\[0\]',
+            'finite',
+        ),
+        (lambda d: d['objects'][0].update(height=0.0), r'objects\[0\].height', '> 0'),
+        (
+            lambda d: d['objects'][2].update(size=[0.1, -0.2, 0.3]),
+            r'objects\[2\].size\[1\]',
+            '> 0',
+        ),
+        (lambda d: d['table'].update(size=[1, 1, 0]), r'table.size\[2\]', '> 0'),
+        (lambda d: d['objects'][1].update(xy=[0.68, 0.03]), r'objects\[1\].xy', 'overlaps'),
+        (lambda d: d['objects'][2].update(xy=[0.7, 0.1]), r'objects\[2\].xy', 'overlaps'),
+        (lambda d: d['objects'][1].update(xy=[0.1, 0.1]), r'objects\[1\]', 'keep-out'),
+        (lambda d: d['objects'][1].update(xy=[0.05, 0.55]), r'objects\[1\].xy', 'drop zone'),
+        (lambda d: d['objects'][1].update(xy=[2.0, 0.0]), r'objects\[1\]', 'not on the table'),
+        (lambda d: d['objects'][0].update(role='obstacle'), 'objects', 'found 0'),
+        (lambda d: d['objects'][1].update(role='target'), 'objects', 'found 2'),
+        (lambda d: d['objects'][1].update(role='goal'), r'objects\[1\].role', 'must be'),
+        (lambda d: d['objects'][1].update(shape='sphere'), r'objects\[1\].shape', 'must be'),
+        (lambda d: d.update(home=[0.0] * 7), r'home\[1\]', 'joint limits'),
+        (lambda d: d.update(home=[1.0] * 6), 'home', 'list of 7'),
+        (lambda d: d.update(objects=[]), 'objects', 'non-empty'),
+        (lambda d: d.update(name=''), 'name', 'non-empty'),
+        (lambda d: d['objects'][0].update(radius='big'), r'objects\[0\].radius', 'number'),
+    ],
+)
+def test_bad_input_rejected_with_field(mutate: Any, field: str, problem: str) -> None:
+    with pytest.raises(ScenarioError, match=rf'^bad.yaml: {field}.*{problem}') as info:
+        parse_scenario(_bad(mutate), source='bad.yaml')
+    assert info.value.source == 'bad.yaml'
+
+
+def test_bad_files(tmp_path: Any) -> None:
+    path = tmp_path / 'broken.yaml'
+    path.write_text('name: [unclosed\n')
+    with pytest.raises(ScenarioError, match=r'broken\.yaml: cannot read YAML'):
+        load_scenario(str(path))
+    path.write_text('- just a list\n')
+    with pytest.raises(ScenarioError, match='top level must be a mapping'):
+        load_scenario(str(path))
+
+
+def test_footprint_overlap_cases() -> None:
+    c1 = Footprint((0.0, 0.0), radius=0.1)
+    c2 = Footprint((0.25, 0.0), radius=0.1)
+    assert not overlap(c1, c2) and overlap(c1, c2, gap=0.06)
+    rect = Footprint((0.0, 0.0), yaw=math.pi / 4, half_size=(0.1, 0.1))
+    # The rotated square reaches 0.1·√2 along x; a circle of radius 0.05 at x = 0.2 misses it.
+    assert not overlap(rect, Footprint((0.2, 0.0), radius=0.05))
+    assert overlap(rect, Footprint((0.18, 0.0), radius=0.05))
+    assert overlap(rect, Footprint((0.25, 0.0), yaw=0.0, half_size=(0.12, 0.05)))
+    assert not overlap(rect, Footprint((0.3, 0.0), yaw=0.0, half_size=(0.12, 0.05)))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    n=st.integers(min_value=0, max_value=20),
+    density=st.floats(min_value=0.02, max_value=0.3),
+    seed=st.integers(min_value=0, max_value=2**31),
+)
+def test_generated_scenes_validate_and_reproduce(n: int, density: float, seed: int) -> None:
+    scenario = generate_clutter(n, density, seed)
+    assert len(scenario.obstacles) == n
+    assert scenario == generate_clutter(n, density, seed)
+    # Round trip through the YAML form re-runs the whole validation.
+    assert parse_scenario(yaml.safe_load(dump_scenario(scenario))) == scenario
+    distances = [math.hypot(*o.position[:2]) for o in (*scenario.obstacles, scenario.target)]
+    assert distances[-1] == max(distances)
+    assert [o.id for o in scenario.obstacles] == [f'O{i}' for i in range(1, n + 1)]
+
+
+def test_generator_seed_changes_scene_and_bad_arguments() -> None:
+    a, b = generate_clutter(10, 0.2, 1), generate_clutter(10, 0.2, 2)
+    assert not np.allclose(a.target.position, b.target.position)
+    with pytest.raises(ScenarioError, match='density'):
+        generate_clutter(5, 0.9, 0)
+    with pytest.raises(ScenarioError, match='n_objects'):
+        generate_clutter(-1, 0.2, 0)
