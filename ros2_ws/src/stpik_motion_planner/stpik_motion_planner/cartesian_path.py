@@ -1,0 +1,224 @@
+"""Cartesian path of a relocation (Sect. 3.1): sampling in ℝ³ with OMPL, side grasp only.
+
+No ROS import. The path is home → pre-grasp (free space: straight line, else RRTConnect) →
+grasp → lift → carry → place in the drop zone → retreat. The hand is a sphere in the free-space
+planner and a box swept along the approach axis in the corridor test; the STPIK check
+(:mod:`stpik_motion_planner.stpik`) then verifies the whole arm along the sampled path.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import fcl
+import numpy as np
+import pinocchio as pin
+from ompl import base as ob
+from ompl import geometric as og
+from ompl import util as ou
+
+from stpik_motion_planner.collision import SceneWorld
+from stpik_motion_planner.config import PlannerConfig
+
+ou.setLogLevel(ou.LOG_ERROR)
+HAND_BACK_M = 0.30  # hand + wrist length behind the EE origin swept by the corridor [m]
+HAND_CENTRE_M = 0.07  # hand sphere centre behind the EE origin [m]
+WORKSPACE = ((-1.0, 1.0), (-1.0, 1.0), (-0.2, 1.2))  # sampling bounds x, y, z [m]
+LINE_STEP_M = 0.02  # resolution of straight-line checks [m]
+# Jaco² j2s7s300 (KINOVA_FACTS.md DH): shoulder = joint 2 at D1 above the base; the wrist centre
+# (joint 6) lies D6 + D7 behind the EE origin along the EE z axis.
+SHOULDER = np.array([0.0, 0.0, 0.2755])  # [m]
+WRIST_TO_EE_M = 0.2638  # [m]
+
+
+def grasp_rotation(yaw: float) -> np.ndarray:
+    """Side-grasp EE orientation: z (approach) horizontal at ``yaw`` [rad], y up; shape (3, 3)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[-s, 0.0, c], [c, 0.0, s], [0.0, 1.0, 0.0]])
+
+
+def approach_yaws(position: np.ndarray, count: int, step: float) -> list[float]:
+    """Yaws to try [rad]: facing away from the base first, then ±step, ±2·step, ..."""
+    base = math.atan2(position[1], position[0])
+    yaws = [base]
+    for i in range(1, count):
+        yaws.append(base + step * ((i + 1) // 2) * (1 if i % 2 else -1))
+    return yaws
+
+
+@dataclass(frozen=True)
+class CartesianPath:
+    """Sampled EE path of one relocation (world frame).
+
+    Attributes:
+        free: hand-centre waypoints of the free-space move home → pre-grasp [m], each (3,).
+        pregrasp: EE pose at the pre-grasp (standoff before the grasp).
+        approach: poses after the pre-grasp up to the grasp (last = grasp).
+        lift: poses after the grasp up to the carry height.
+        place_options: per candidate hand yaw at the drop slot (outward, then sideways):
+            (EE pose above the slot at carry height, poses down to the release (last =
+            release), poses backing off after the release).
+        approach_yaw: yaw of the approach axis [rad].
+    """
+
+    free: list[np.ndarray]
+    pregrasp: pin.SE3
+    approach: list[pin.SE3]
+    lift: list[pin.SE3]
+    place_options: list[tuple[pin.SE3, list[pin.SE3], list[pin.SE3]]]
+    approach_yaw: float
+
+
+def _spherical(v: np.ndarray) -> tuple[float, float, float]:
+    rho = float(np.linalg.norm(v))
+    return rho, math.atan2(v[1], v[0]), math.acos(max(-1.0, min(1.0, v[2] / max(rho, 1e-12))))
+
+
+def wrist_arc_point(start: pin.SE3, goal: pin.SE3, t: float, rotation: np.ndarray) -> np.ndarray:
+    """EE position at fraction ``t`` [0, 1] of a wrist-arc move, shape (3,) [m].
+
+    The wrist centre (``WRIST_TO_EE_M`` behind the EE along its z axis) moves on spherical
+    coordinates about the shoulder, radius and angles interpolated linearly: the
+    shoulder–wrist distance, hence the elbow angle, then changes monotonically between the two
+    ends, which keeps the elbow (joint 4) off its limits where a straight chord would fold it.
+
+    Args:
+        start: start EE pose (world).
+        goal: goal EE pose (world).
+        t: fraction of the move.
+        rotation: EE orientation at ``t``, shape (3, 3).
+    """
+    w0 = start.translation - WRIST_TO_EE_M * start.rotation[:, 2] - SHOULDER
+    w1 = goal.translation - WRIST_TO_EE_M * goal.rotation[:, 2] - SHOULDER
+    (r0, a0, p0), (r1, a1, p1) = _spherical(w0), _spherical(w1)
+    da = (a1 - a0 + math.pi) % (2 * math.pi) - math.pi
+    r, a, p = r0 + (r1 - r0) * t, a0 + da * t, p0 + (p1 - p0) * t
+    wrist = SHOULDER + r * np.array(
+        [math.sin(p) * math.cos(a), math.sin(p) * math.sin(a), math.cos(p)]
+    )
+    return wrist + WRIST_TO_EE_M * rotation[:, 2]
+
+
+def interpolate(
+    start: pin.SE3, goal: pin.SE3, step_m: float, step_rad: float, wrist_arc: bool = False
+) -> list[pin.SE3]:
+    """Poses from ``start`` (excluded) to ``goal`` (included), spaced ≤ step_m and ≤ step_rad.
+
+    Positions follow the straight chord, or with ``wrist_arc`` the move of
+    :func:`wrist_arc_point`; orientations follow the geodesic (slerp) in both cases.
+    """
+    delta = pin.log3(start.rotation.T @ goal.rotation)
+
+    def at(t: float) -> pin.SE3:
+        rotation = start.rotation @ pin.exp3(delta * t)
+        if wrist_arc:
+            return pin.SE3(rotation, wrist_arc_point(start, goal, t, rotation))
+        return pin.SE3(rotation, start.translation + (goal.translation - start.translation) * t)
+
+    if wrist_arc:
+        coarse = [at(t).translation for t in np.linspace(0.0, 1.0, 9)]
+        length = float(sum(np.linalg.norm(b - a) for a, b in itertools.pairwise(coarse)))
+    else:
+        length = float(np.linalg.norm(goal.translation - start.translation))
+    n = max(1, math.ceil(length / step_m), math.ceil(np.linalg.norm(delta) / step_rad))
+    return [at(t) for t in np.arange(1, n + 1) / n]
+
+
+class CartesianSampler:
+    """Plans the hand's Cartesian path in one scene (the object being moved excluded)."""
+
+    def __init__(self, scene: SceneWorld, config: PlannerConfig) -> None:
+        self.scene = scene
+        # The free-space probe ignores static bodies (the table): its height bounds keep it above
+        # them, and the STPIK check verifies the real hand against every body.
+        self.movable = SceneWorld(o for o in scene.objects.values() if o.role != 'static')
+        self.config = config
+        radius = config.hand_radius_m
+        self._sphere_geometry = fcl.Sphere(radius)
+        self._sphere = fcl.CollisionObject(self._sphere_geometry, fcl.Transform())
+        self.validity_checks = 0
+
+    def point_free(self, point: np.ndarray) -> bool:
+        """True when the hand sphere centred at ``point`` [m] (3,) clears the scene."""
+        self.validity_checks += 1
+        self._sphere.setTranslation(np.asarray(point, dtype=float))
+        return not self.movable.clearance(
+            self._sphere, self._sphere_geometry, self.config.obstacle_min_distance_m
+        )
+
+    def box_free(self, centre: np.ndarray, rotation: np.ndarray, size: np.ndarray) -> bool:
+        """True when a box (full ``size`` [m], at ``centre`` / ``rotation``) clears the scene."""
+        geometry = fcl.Box(*size)
+        body = fcl.CollisionObject(geometry, fcl.Transform(rotation, centre))
+        return not self.scene.clearance(body, geometry, self.config.obstacle_min_distance_m)
+
+    def segment_free(self, a: np.ndarray, b: np.ndarray) -> bool:
+        """True when the hand sphere swept from ``a`` to ``b`` [m] clears the scene."""
+        n = max(1, math.ceil(float(np.linalg.norm(b - a)) / LINE_STEP_M))
+        return all(self.point_free(a + (b - a) * t) for t in np.linspace(0.0, 1.0, n + 1))
+
+    def poses_free(self, poses: list[pin.SE3]) -> bool:
+        """True when the hand sphere clears the scene at every EE pose of ``poses``."""
+        return all(
+            self.point_free(p.translation - HAND_CENTRE_M * p.rotation[:, 2]) for p in poses
+        )
+
+    def corridor_free(self, grasp: pin.SE3) -> bool:
+        """The hand's approach corridor (pre-grasp → grasp, wrist included) is clear."""
+        c = self.config
+        axis = grasp.rotation[:, 2]
+        back = c.pregrasp_standoff_m + HAND_BACK_M
+        centre = grasp.translation - axis * back / 2
+        size = np.array([c.hand_width_m, c.hand_width_m, back])
+        return self.box_free(centre, grasp.rotation, size)
+
+    def free_path(self, start: np.ndarray, goal: np.ndarray) -> list[np.ndarray]:
+        """Hand-centre waypoints from ``start`` to ``goal`` [m]: straight, else RRTConnect.
+
+        Returns:
+            Waypoints including both ends, or [] when no path was found in time.
+        """
+        if not (self.point_free(start) and self.point_free(goal)):
+            return []
+        if self.segment_free(start, goal):
+            return [start, goal]
+        space = ob.RealVectorStateSpace(3)
+        bounds = ob.RealVectorBounds(3)
+        for i, (low, high) in enumerate(WORKSPACE):
+            if i == 2:  # never below the lower end (the pre-grasp is at grasp height)
+                low = min(float(start[2]), float(goal[2]))
+            bounds.setLow(i, low)
+            bounds.setHigh(i, high)
+        space.setBounds(bounds)
+        setup = og.SimpleSetup(space)
+        setup.setStateValidityChecker(lambda s: self.point_free(np.array([s[0], s[1], s[2]])))
+        setup.getSpaceInformation().setStateValidityCheckingResolution(
+            LINE_STEP_M / space.getMaximumExtent()
+        )
+        a, b = space.allocState(), space.allocState()
+        for i in range(3):
+            a[i], b[i] = float(start[i]), float(goal[i])
+        setup.setStartAndGoalStates(a, b)
+        setup.setPlanner(og.RRTConnect(setup.getSpaceInformation()))
+        status = setup.solve(self.config.sampling_time_s)
+        if not setup.haveExactSolutionPath() or 'Exact' not in str(status):
+            return []
+        path = setup.getSolutionPath()
+        states = [
+            np.array([path.getState(i)[j] for j in range(3)]) for i in range(path.getStateCount())
+        ]
+        return self.shortcut(states)
+
+    def shortcut(self, points: list[np.ndarray]) -> list[np.ndarray]:
+        """Greedy deterministic shortcut: from each kept point jump to the farthest visible."""
+        out = [points[0]]
+        i = 0
+        while i < len(points) - 1:
+            j = len(points) - 1
+            while j > i + 1 and not self.segment_free(points[i], points[j]):
+                j -= 1
+            out.append(points[j])
+            i = j
+        return out

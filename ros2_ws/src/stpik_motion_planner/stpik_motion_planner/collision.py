@@ -1,0 +1,241 @@
+"""python-fcl worlds: the scene objects and the arm's links, with broad-phase distance queries.
+
+No ROS import. Every query goes through ``fcl.DynamicAABBTreeCollisionManager``; the Python
+callback only sees pairs whose bounding boxes are closer than the query threshold, so a query
+where nothing is near costs one broad-phase traversal in C++.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import fcl
+import numpy as np
+import pinocchio as pin
+from jaco2_sim.scene import ObjectSpec
+
+_REQUEST = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
+# Links of the 7-DoF Jaco² (short names) in the groups whose cross pairs are all non-adjacent.
+_PROXIMAL = ('link_base', 'link_1', 'link_2', 'link_3')
+_DISTAL = ('link_5', 'link_6', 'link_7', 'finger', 'attached')
+_FOREARM_PROXIMAL = ('link_base', 'link_1', 'link_2')
+_HAND = ('link_7', 'finger', 'attached')
+_WRIST = ('link_4', 'link_5')
+# Links never checked against the scene: the base stands on the table, link_1 turns above it.
+_NOT_VS_SCENE = ('link_base', 'link_1')
+
+
+@dataclass(frozen=True)
+class Proximity:
+    """One close pair found by a distance query.
+
+    Attributes:
+        name_a: robot collision body (link name or ``'attached'``).
+        name_b: other body (scene object id or link name).
+        distance: signed distance [m] (≤ 0: contact).
+        point_a: closest point on ``name_a`` in the world frame [m], shape (3,).
+        point_b: closest point on ``name_b`` in the world frame [m], shape (3,).
+    """
+
+    name_a: str
+    name_b: str
+    distance: float
+    point_a: np.ndarray
+    point_b: np.ndarray
+
+
+def object_geometry(obj: ObjectSpec, inflate: float = 0.0) -> fcl.CollisionGeometry:
+    """python-fcl geometry of a scene object, grown by ``inflate`` [m] on every side."""
+    if obj.shape == 'cylinder':
+        return fcl.Cylinder(obj.radius + inflate, obj.height + 2 * inflate)
+    return fcl.Box(*(np.asarray(obj.size, dtype=float) + 2 * inflate))
+
+
+def object_transform(obj: ObjectSpec) -> fcl.Transform:
+    """World placement of a scene object (yaw about z)."""
+    c, s = np.cos(obj.yaw), np.sin(obj.yaw)
+    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return fcl.Transform(rotation, np.asarray(obj.position, dtype=float))
+
+
+class _Collector:
+    """Callback data: keeps every pair closer than ``threshold`` [m]."""
+
+    def __init__(self, names: dict[int, str], threshold: float) -> None:
+        self.names = names
+        self.threshold = threshold
+        self.found: list[Proximity] = []
+
+
+def _collect(o1: fcl.CollisionObject, o2: fcl.CollisionObject, data: _Collector):
+    result = fcl.DistanceResult()
+    distance = fcl.distance(o1, o2, _REQUEST, result)
+    if distance < data.threshold:
+        a, b = data.names[id(result.o1)], data.names[id(result.o2)]
+        pa, pb = result.nearest_points
+        data.found.append(Proximity(a, b, distance, pa, pb))
+    return False, data.threshold
+
+
+class SceneWorld:
+    """The scene objects (all roles) as one broad-phase manager.
+
+    Attributes:
+        objects: the objects in the manager, by id.
+    """
+
+    def __init__(self, objects: Iterable[ObjectSpec]) -> None:
+        self.objects = {obj.id: obj for obj in objects}
+        self._names: dict[int, str] = {}
+        self._keep: list[fcl.CollisionObject] = []
+        self.manager = fcl.DynamicAABBTreeCollisionManager()
+        for obj in self.objects.values():
+            geometry = object_geometry(obj)
+            self._names[id(geometry)] = obj.id
+            self._keep.append(fcl.CollisionObject(geometry, object_transform(obj)))
+        if self._keep:
+            self.manager.registerObjects(self._keep)
+        self.manager.setup()
+
+    @property
+    def names(self) -> dict[int, str]:
+        """Object id by ``id()`` of its fcl geometry."""
+        return self._names
+
+    def clearance(
+        self, body: fcl.CollisionObject, geometry: fcl.CollisionGeometry, threshold: float
+    ) -> list[Proximity]:
+        """Scene objects closer than ``threshold`` [m] to ``body`` (whose geometry is given).
+
+        The probe is reported as ``name_a='probe'``.
+        """
+        if not self._keep:
+            return []
+        data = _Collector({**self._names, id(geometry): 'probe'}, threshold)
+        self.manager.distance(body, data, _collect)
+        return [_probe_first(p) for p in data.found]
+
+
+def _probe_first(p: Proximity) -> Proximity:
+    if p.name_b == 'probe':
+        return Proximity(p.name_b, p.name_a, p.distance, p.point_b, p.point_a)
+    return p
+
+
+class RobotBodies:
+    """The arm's collision primitives (from the Pinocchio ``GeometryModel``) as fcl objects.
+
+    Bodies are grouped so that every cross pair of a self-hit query is a pair of
+    ``Jaco2Model.self_collision_pairs`` (no adjacent links), see the module constants. The
+    broad-phase managers are built once and updated after each :meth:`place`.
+    """
+
+    def __init__(self, geometry_model: pin.GeometryModel, link_names: list[str]) -> None:
+        self.link_names = list(link_names)
+        self.names: dict[int, str] = {}
+        self.bodies: list[fcl.CollisionObject] = []
+        self._geometries: list[fcl.CollisionGeometry] = []
+        for name, g in zip(self.link_names, geometry_model.geometryObjects, strict=True):
+            geometry = _fcl_geometry(g.geometry)
+            self.names[id(geometry)] = name
+            self._geometries.append(geometry)
+            self.bodies.append(fcl.CollisionObject(geometry, fcl.Transform()))
+        self.attached: fcl.CollisionObject | None = None
+        self._attached_offset = pin.SE3.Identity()
+        self._build_managers()
+
+    def _group(self, keys: tuple[str, ...]) -> list[fcl.CollisionObject]:
+        out = [b for n, b in zip(self.link_names, self.bodies, strict=True) if _short(n) in keys]
+        if 'attached' in keys and self.attached is not None:
+            out.append(self.attached)
+        return out
+
+    def _build_managers(self) -> None:
+        pairs = ((_DISTAL, _PROXIMAL), (('link_4',), _FOREARM_PROXIMAL), (_HAND, _WRIST))
+        self._self_pairs = [(_manager(self._group(a)), _manager(self._group(b))) for a, b in pairs]
+        keys = tuple(_short(n) for n in self.link_names if _short(n) not in _NOT_VS_SCENE)
+        self._scene_manager = _manager(self._group((*keys, 'attached')))
+        self._managers = [m for pair in self._self_pairs for m in pair] + [self._scene_manager]
+
+    def attach(self, obj: ObjectSpec, transform_obj_to_ee: pin.SE3, settle_m: float = 0.0) -> None:
+        """Carry ``obj`` rigidly at ``transform_obj_to_ee`` (its pose in the EE frame).
+
+        Args:
+            obj: the grasped object.
+            transform_obj_to_ee: pose of the object in the EE frame.
+            settle_m: the object's collision body is this much shorter at each end [m], so
+                that setting it down on the table is not a collision (sideways margins stay).
+        """
+        if obj.shape == 'cylinder':
+            geometry = fcl.Cylinder(obj.radius, max(obj.height - 2 * settle_m, 1e-3))
+        else:
+            sx, sy, sz = obj.size
+            geometry = fcl.Box(sx, sy, max(sz - 2 * settle_m, 1e-3))
+        self.names[id(geometry)] = 'attached'
+        self._attached_geometry = geometry
+        self.attached = fcl.CollisionObject(geometry, fcl.Transform())
+        self._attached_offset = transform_obj_to_ee
+        self._build_managers()
+
+    def detach(self) -> None:
+        """Stop carrying the attached object."""
+        if self.attached is not None:
+            self.attached = None
+            self._build_managers()
+
+    def place(self, oMg: list[pin.SE3], world_ee: pin.SE3) -> None:
+        """Move the bodies to the geometry placements ``oMg`` and the EE pose ``world_ee``."""
+        for body, placement in zip(self.bodies, oMg, strict=True):
+            body.setTransform(fcl.Transform(placement.rotation, placement.translation))
+        if self.attached is not None:
+            world_obj = world_ee * self._attached_offset
+            self.attached.setTransform(fcl.Transform(world_obj.rotation, world_obj.translation))
+        for manager in self._managers:
+            manager.update()
+
+    def self_proximities(self, threshold: float) -> list[Proximity]:
+        """Non-adjacent body pairs closer than ``threshold`` [m] (three broad-phase queries)."""
+        found: list[Proximity] = []
+        for manager_a, manager_b in self._self_pairs:
+            data = _Collector(self.names, threshold)
+            manager_a.distance(manager_b, data, _collect)
+            found += data.found
+        return found
+
+    def scene_proximities(self, scene: SceneWorld, threshold: float) -> list[Proximity]:
+        """(body, scene object) pairs closer than ``threshold`` [m]; the base is skipped."""
+        if not scene.objects:
+            return []
+        data = _Collector({**self.names, **scene.names}, threshold)
+        self._scene_manager.distance(scene.manager, data, _collect)
+        return [_robot_first(p, scene) for p in data.found]
+
+
+def _manager(bodies: list[fcl.CollisionObject]) -> fcl.DynamicAABBTreeCollisionManager:
+    manager = fcl.DynamicAABBTreeCollisionManager()
+    if bodies:
+        manager.registerObjects(bodies)
+    manager.setup()
+    return manager
+
+
+def _robot_first(p: Proximity, scene: SceneWorld) -> Proximity:
+    if p.name_a in scene.objects and p.name_b not in scene.objects:
+        return Proximity(p.name_b, p.name_a, p.distance, p.point_b, p.point_a)
+    return p
+
+
+def _short(link: str) -> str:
+    short = link.removeprefix('j2s7s300_')
+    return 'finger' if short.startswith('link_finger') else short
+
+
+def _fcl_geometry(geometry: object) -> fcl.CollisionGeometry:
+    if hasattr(geometry, 'halfLength'):
+        return fcl.Cylinder(float(geometry.radius), 2.0 * float(geometry.halfLength))
+    if hasattr(geometry, 'halfSide'):
+        return fcl.Box(*(2.0 * np.asarray(geometry.halfSide)))
+    if hasattr(geometry, 'radius'):
+        return fcl.Sphere(float(geometry.radius))
+    raise TypeError(f'unsupported collision geometry {type(geometry).__name__}')

@@ -1,0 +1,122 @@
+"""Tunable numbers of the motion planner, with their ranges (no ROS import).
+
+The node declares one ROS parameter per field of :class:`PlannerConfig` (same name, same range),
+so :data:`RANGES` is the single place where valid values are defined.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+from stpik_motion_planner.exceptions import InvalidConfig
+
+# name -> (lower, upper, description); every bound inclusive.
+RANGES: dict[str, tuple[float, float, str]] = {
+    'position_tolerance_m': (1e-4, 0.1, 'EE position tracking tolerance [m]'),
+    'orientation_tolerance_rad': (1e-3, 0.5, 'EE orientation tracking tolerance [rad]'),
+    'ee_gain': (0.05, 1.0, 'EE task gain K·dt per STPIK iteration (eq. 6) [-]'),
+    'set_gain': (0.05, 1.0, 'gain K·dt of activated set-based tasks [-]'),
+    'posture_gain': (0.0, 1.0, 'gain K·dt of the lowest-priority posture task [-]'),
+    'damping': (1e-6, 0.5, 'damping of the pseudo-inverse near singularities [-]'),
+    'singular_threshold': (1e-4, 0.5, 'singular value below which damping starts [-]'),
+    'joint_limit_activation_rad': (0.0, 0.5, 'joint-limit task activation margin [rad]'),
+    'self_activation_m': (0.0, 0.2, 'self-hit task activation distance [m]'),
+    'self_min_distance_m': (0.0, 0.1, 'self-hit failure distance [m]'),
+    'obstacle_activation_m': (0.0, 0.2, 'obstacle task activation distance [m]'),
+    'obstacle_min_distance_m': (0.0, 0.1, 'scene safety margin: failure distance [m]'),
+    'step_m': (0.005, 0.2, 'Cartesian sample spacing along the path [m]'),
+    'step_rad': (0.01, 1.0, 'Cartesian sample spacing in orientation [rad]'),
+    'max_iterations': (1, 100, 'STPIK iterations per path sample [-]'),
+    'max_joint_step_rad': (0.01, 1.0, 'largest joint change per STPIK iteration [rad]'),
+    'time_limit_s': (1e-3, 600.0, 'planning time limit of one check [s]'),
+    'sampling_time_s': (1e-3, 10.0, 'RRTConnect time budget per free-space segment [s]'),
+    'seed': (0, 2**31 - 1, 'seed of the sampling planner [-]'),
+    'approach_directions': (1, 16, 'approach yaws tried around the object [-]'),
+    'approach_yaw_step_rad': (0.05, 1.6, 'yaw between consecutive approach directions [rad]'),
+    'pregrasp_standoff_m': (0.02, 0.5, 'pre-grasp distance before the grasp [m]'),
+    'grasp_depth_m': (-0.05, 0.05, 'EE origin beyond the object axis along the approach [m]'),
+    'lift_clearance_m': (0.0, 0.5, 'carried object bottom above the tallest object [m]'),
+    'retreat_m': (0.0, 0.5, 'retreat after release along -approach [m]'),
+    'hand_radius_m': (0.01, 0.3, 'sphere bounding the hand for Cartesian sampling [m]'),
+    'hand_width_m': (0.01, 0.3, 'width of the hand corridor swept on approach [m]'),
+    'velocity_scale': (0.01, 1.0, 'fraction of the joint velocity limits used [-]'),
+    'slot_spacing_m': (0.02, 0.5, 'distance between drop-zone slots [m]'),
+}
+INTEGER_FIELDS = frozenset({'max_iterations', 'seed', 'approach_directions'})
+
+
+@dataclass
+class PlannerConfig:
+    """All tunable numbers; see :data:`RANGES` for units and ranges."""
+
+    position_tolerance_m: float = 0.01
+    orientation_tolerance_rad: float = 0.05
+    ee_gain: float = 1.0
+    set_gain: float = 0.5
+    posture_gain: float = 0.1
+    damping: float = 0.02
+    singular_threshold: float = 0.02
+    joint_limit_activation_rad: float = 0.1
+    self_activation_m: float = 0.03
+    self_min_distance_m: float = 0.005
+    obstacle_activation_m: float = 0.025
+    obstacle_min_distance_m: float = 0.005
+    step_m: float = 0.04
+    step_rad: float = 0.15
+    max_iterations: int = 6
+    max_joint_step_rad: float = 0.3
+    time_limit_s: float = 2.0
+    sampling_time_s: float = 0.05
+    seed: int = 0
+    approach_directions: int = 5
+    approach_yaw_step_rad: float = 0.4
+    pregrasp_standoff_m: float = 0.1
+    grasp_depth_m: float = 0.0
+    lift_clearance_m: float = 0.04
+    retreat_m: float = 0.08
+    hand_radius_m: float = 0.07
+    hand_width_m: float = 0.11
+    velocity_scale: float = 0.5
+    slot_spacing_m: float = 0.1
+
+    def __post_init__(self) -> None:
+        self.validate()
+
+    def validate(self) -> None:
+        """Check every field against :data:`RANGES`.
+
+        Raises:
+            InvalidConfig: a value is not a finite number inside its range, or an activation
+                threshold is below its failure distance.
+        """
+        for item in dataclasses.fields(self):
+            check_value(item.name, getattr(self, item.name))
+        if self.obstacle_activation_m < self.obstacle_min_distance_m:
+            raise InvalidConfig(
+                'obstacle_activation_m', self.obstacle_activation_m, 'below obstacle_min'
+            )
+        if self.self_activation_m < self.self_min_distance_m:
+            raise InvalidConfig('self_activation_m', self.self_activation_m, 'below self_min')
+
+    def replace(self, **changes: float) -> PlannerConfig:
+        """A validated copy with ``changes`` applied."""
+        return dataclasses.replace(self, **changes)
+
+
+def check_value(name: str, value: object) -> None:
+    """Check one field value.
+
+    Raises:
+        InvalidConfig: unknown name, wrong type, not finite, or out of range.
+    """
+    if name not in RANGES:
+        raise InvalidConfig(name, value, 'unknown planner setting')
+    low, high, _ = RANGES[name]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InvalidConfig(name, value, 'must be a number')
+    if name in INTEGER_FIELDS and not float(value).is_integer():
+        raise InvalidConfig(name, value, 'must be an integer')
+    if not math.isfinite(value) or not low <= value <= high:
+        raise InvalidConfig(name, value, f'must be in [{low}, {high}]')

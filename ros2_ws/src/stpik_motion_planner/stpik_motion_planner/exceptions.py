@@ -1,0 +1,107 @@
+"""Typed exceptions of the motion planner, all under :class:`MotionPlannerError` (no ROS import).
+
+Every exception carries the :class:`~stpik_motion_planner.result.Reason` it maps to, so the planner
+turns any of them into a :class:`~stpik_motion_planner.result.PlanResult` in one place.
+"""
+
+from __future__ import annotations
+
+from stpik_motion_planner.result import Reason
+
+
+class MotionPlannerError(Exception):
+    """Base class of every error raised by the motion-planner core."""
+
+    reason: Reason = Reason.INVALID_REQUEST
+
+
+class InvalidRequest(MotionPlannerError):  # noqa: N818
+    """A request or scene cannot be planned for (unknown id, duplicates, NaN pose...)."""
+
+    def __init__(self, reason: Reason, message: str) -> None:
+        self.reason = reason
+        super().__init__(message)
+
+
+class InvalidConfig(MotionPlannerError, ValueError):  # noqa: N818
+    """A :class:`~stpik_motion_planner.config.PlannerConfig` value is out of range."""
+
+    def __init__(self, name: str, value: object, problem: str) -> None:
+        self.name = name
+        self.value = value
+        super().__init__(f'{name}={value!r}: {problem}')
+
+
+class NoCartesianPath(MotionPlannerError):  # noqa: N818
+    """No approach direction has a collision-free Cartesian path for the hand."""
+
+    reason = Reason.NO_CARTESIAN_PATH
+
+    def __init__(self, object_id: str, detail: str) -> None:
+        self.object_id = object_id
+        super().__init__(f'no collision-free Cartesian path to {object_id!r}: {detail}')
+
+
+class IkNotConverged(MotionPlannerError):  # noqa: N818
+    """STPIK could not track the end-effector path within tolerance."""
+
+    reason = Reason.IK_NOT_CONVERGED
+
+    def __init__(self, sample: int, residual_m: float, residual_rad: float) -> None:
+        self.sample = sample
+        self.residual_m = residual_m
+        self.residual_rad = residual_rad
+        super().__init__(
+            f'tracking error at sample {sample}: {residual_m * 1000:.1f} mm, '
+            f'{residual_rad:.3f} rad'
+        )
+
+
+class JointLimitViolated(MotionPlannerError):  # noqa: N818
+    """A joint left its mechanical range (or was held at it while tracking failed)."""
+
+    reason = Reason.JOINT_LIMIT
+
+    def __init__(self, joint: int, value: float, lower: float, upper: float) -> None:
+        self.joint = joint
+        self.value = value
+        self.lower = lower
+        self.upper = upper
+        super().__init__(
+            f'joint {joint + 1} at {value:.3f} rad, range [{lower:.3f}, {upper:.3f}] rad'
+        )
+
+
+class SelfCollision(MotionPlannerError):  # noqa: N818
+    """Two links of the arm came closer than the self-hit margin."""
+
+    reason = Reason.SELF_COLLISION
+
+    def __init__(self, link_a: str, link_b: str, distance_m: float) -> None:
+        self.link_a = link_a
+        self.link_b = link_b
+        self.distance_m = distance_m
+        super().__init__(f'self-hit {link_a} / {link_b}: distance {distance_m * 1000:.1f} mm')
+
+
+class SceneCollision(MotionPlannerError):  # noqa: N818
+    """A link (or the grasped object) came closer to a scene object than the safety margin."""
+
+    reason = Reason.SCENE_COLLISION
+
+    def __init__(self, link: str, object_id: str, distance_m: float) -> None:
+        self.link = link
+        self.object_id = object_id
+        self.distance_m = distance_m
+        super().__init__(f'{link} hits {object_id!r}: distance {distance_m * 1000:.1f} mm')
+
+
+class PlanningTimeout(MotionPlannerError):  # noqa: N818
+    """The check ran past ``PlannerConfig.time_limit_s``."""
+
+    reason = Reason.TIMEOUT
+
+    def __init__(self, elapsed_s: float, limit_s: float) -> None:
+        self.elapsed_s = elapsed_s
+        self.limit_s = limit_s
+        super().__init__(f'planning took {elapsed_s:.3f} s > time limit {limit_s:.3f} s')

@@ -1,0 +1,336 @@
+"""The motion planner: validates a relocation request, samples the Cartesian path, runs the STPIK
+check and caches the answer (paper Sect. 3.1, Figure 2). No ROS import.
+
+With Assumption 2 the objects already relocated are simply removed from the scene, so a check
+depends only on ``(frozenset(relocated_ids), object_id)`` (see :mod:`.cache`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Iterable
+
+import numpy as np
+import pinocchio as pin
+from jaco2_sim.model import Jaco2Model
+from jaco2_sim.scene import ObjectSpec, Scenario
+from ompl import util as ou
+
+from stpik_motion_planner.cache import FeasibilityCache
+from stpik_motion_planner.cartesian_path import (
+    HAND_CENTRE_M,
+    CartesianPath,
+    CartesianSampler,
+    approach_yaws,
+    grasp_rotation,
+    interpolate,
+)
+from stpik_motion_planner.collision import SceneWorld
+from stpik_motion_planner.config import PlannerConfig
+from stpik_motion_planner.exceptions import (
+    InvalidRequest,
+    MotionPlannerError,
+    NoCartesianPath,
+    PlanningTimeout,
+)
+from stpik_motion_planner.result import PlanResult, Reason
+from stpik_motion_planner.scene_checks import validate_request, validate_scenario
+from stpik_motion_planner.stpik import Stpik
+
+HAND_BELOW_EE_M = 0.06  # lowest point of the hand below the EE origin in a side grasp [m]
+HAND_HALF_HEIGHT_M = 0.0525  # half the hand's extent across the approach axis [m]
+CARRY_MIN_Z_M = 0.3  # lowest EE height of the carry transit [m]
+MIN_SEGMENT_S = 0.05  # shortest time between two trajectory samples [s]
+_OMPL_SEEDED: list[int] = []
+
+
+class MotionPlanner:
+    """Feasibility checks (and trajectories) for relocating objects of one scenario.
+
+    Attributes:
+        scenario: the scene planned against.
+        config: tunable numbers.
+        cache: results by ``(frozenset(relocated_ids), object_id)``.
+        home_q: start configuration of every plan [rad], shape (7,).
+    """
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        config: PlannerConfig | None = None,
+        model: Jaco2Model | None = None,
+    ) -> None:
+        """Build the planner.
+
+        Raises:
+            InvalidRequest: (``INVALID_SCENE``) the scenario has NaN poses, bad sizes, ...
+        """
+        validate_scenario(scenario)
+        self.scenario = scenario
+        self.config = config if config is not None else PlannerConfig()
+        self.robot = model if model is not None else Jaco2Model()
+        self.stpik = Stpik(self.robot, self.config)
+        self.cache = FeasibilityCache()
+        self.home_q = np.asarray(scenario.home, dtype=float)
+        self.home_pose = pin.SE3(self.robot.ee_pose(self.home_q))
+        if not _OMPL_SEEDED:  # OMPL takes one global seed per process (first call only)
+            ou.RNG.setSeed(int(self.config.seed) + 1)
+            _OMPL_SEEDED.append(self.config.seed)
+
+    def check(self, object_id: str, relocated_ids: Iterable[str]) -> PlanResult:
+        """Can ``object_id`` be relocated once ``relocated_ids`` are gone? Uses the cache.
+
+        Bad requests give ``feasible=False`` with a 1xx reason; never raises.
+        """
+        relocated = list(relocated_ids)
+        try:
+            validate_request(self.scenario, object_id, relocated)
+        except InvalidRequest as err:
+            return PlanResult(False, err.reason, str(err))
+        cached = self.cache.get(object_id, relocated)
+        if cached is not None:
+            return dataclasses.replace(cached, from_cache=True)
+        result = self.plan(object_id, relocated)
+        if result.reason != Reason.TIMEOUT:  # a timeout may pass on a quieter machine
+            self.cache.put(object_id, relocated, result)
+        return result
+
+    def slot_position(self, index: int, obj: ObjectSpec) -> np.ndarray:
+        """Centre [m] (3,) of ``obj`` standing in drop-zone slot ``index`` (grid, wraps)."""
+        centre = np.asarray(self.scenario.drop_zone_center, dtype=float)
+        size = np.asarray(self.scenario.drop_zone_size, dtype=float)
+        spacing = self.config.slot_spacing_m
+        nx = max(1, int(size[0] // spacing))
+        ny = max(1, int(size[1] // spacing))
+        i, j = divmod(index % (nx * ny), ny)
+        x = centre[0] + (i - (nx - 1) / 2) * spacing
+        y = centre[1] + (j - (ny - 1) / 2) * spacing
+        half = obj.height / 2 if obj.shape == 'cylinder' else obj.size[2] / 2
+        return np.array([x, y, centre[2] - size[2] / 2 + half])
+
+    def plan(self, object_id: str, relocated: list[str]) -> PlanResult:
+        """Plan without the cache (the request must be valid)."""
+        c = self.config
+        start = time.perf_counter()
+        deadline = start + c.time_limit_s
+        timings = {'sampling': 0.0, 'stpik': 0.0, 'collision': 0.0}
+        obj = self.scenario.object(object_id)
+        removed = set(relocated) | {object_id}
+        scene = SceneWorld(o for o in self.scenario.objects if o.id not in removed)
+        sampler = CartesianSampler(scene, c)
+        slot = self.slot_position(len(relocated), obj)
+        centre = np.asarray(obj.position, dtype=float)
+        failures: list[MotionPlannerError] = []
+        try:
+            for yaw in approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad):
+                t0 = time.perf_counter()
+                path = self._sample(sampler, scene, obj, yaw, slot, failures)
+                timings['sampling'] += time.perf_counter() - t0
+                if path is None:
+                    continue
+                try:
+                    trajectory, grasp_index, release_index = self._track(
+                        path, scene, obj, deadline, timings
+                    )
+                except PlanningTimeout:
+                    raise
+                except MotionPlannerError as err:
+                    failures.append(err)
+                    continue
+                return self._success(path, trajectory, grasp_index, release_index, start, timings)
+            if time.perf_counter() > deadline:
+                raise PlanningTimeout(time.perf_counter() - start, c.time_limit_s)
+        except PlanningTimeout as err:
+            return PlanResult(
+                False, Reason.TIMEOUT, str(err), planning_time=_since(start), timings=timings
+            )
+        error = _most_informative(failures, object_id)
+        return PlanResult(
+            False, error.reason, str(error), planning_time=_since(start), timings=timings
+        )
+
+    def _sample(
+        self,
+        sampler: CartesianSampler,
+        scene: SceneWorld,
+        obj: ObjectSpec,
+        yaw: float,
+        slot: np.ndarray,
+        failures: list,
+    ) -> CartesianPath | None:
+        c = self.config
+        rotation = grasp_rotation(yaw)
+        axis = rotation[:, 2]
+        centre = np.asarray(obj.position, dtype=float)
+        half = obj.height / 2 if obj.shape == 'cylinder' else obj.size[2] / 2
+        # Mid-height, raised on short objects so the hand keeps its margin to the table.
+        low = centre[2] - half + HAND_HALF_HEIGHT_M + c.obstacle_activation_m + 0.005
+        grasp_z = min(max(centre[2], low), centre[2] + half - 0.01)
+        grasp = pin.SE3(rotation, np.r_[centre[:2], grasp_z] + c.grasp_depth_m * axis)
+        if not sampler.corridor_free(grasp):
+            failures.append(
+                NoCartesianPath(obj.id, f'approach corridor at yaw {yaw:.2f} rad is blocked')
+            )
+            return None
+        pregrasp = pin.SE3(rotation, grasp.translation - c.pregrasp_standoff_m * axis)
+        offset = -HAND_CENTRE_M * axis  # hand sphere centre behind the EE origin [m]
+        free = sampler.free_path(
+            self.home_pose.translation + offset, pregrasp.translation + offset
+        )
+        if not free:
+            failures.append(
+                NoCartesianPath(obj.id, f'no free path to the pre-grasp at yaw {yaw:.2f} rad')
+            )
+            return None
+        tops = [o.top_z for o in scene.objects.values() if o.role != 'static']
+        highest = max(tops, default=obj.position[2])
+        carry_z = max(
+            highest + c.lift_clearance_m + max(half, HAND_BELOW_EE_M), grasp.translation[2] + 0.05
+        )
+        lift = pin.SE3(rotation, np.r_[grasp.translation[:2], carry_z])
+        slot = slot + np.r_[0.0, 0.0, grasp_z - centre[2]]  # EE height at release
+        step_m, step_rad = c.step_m, c.step_rad
+        options = []
+        azimuth = math.atan2(slot[1], slot[0])
+        for place_yaw in (azimuth, azimuth + math.pi / 2, azimuth - math.pi / 2):
+            place_rotation = grasp_rotation(place_yaw)
+            above = pin.SE3(place_rotation, np.r_[slot[:2], max(carry_z, CARRY_MIN_Z_M)])
+            place = pin.SE3(place_rotation, slot)
+            up_and_back = np.r_[0.0, 0.0, 1.0] - place_rotation[:, 2]
+            retreat = pin.SE3(place_rotation, slot + c.retreat_m * up_and_back)
+            options.append(
+                (
+                    above,
+                    interpolate(above, place, step_m, step_rad),
+                    interpolate(place, retreat, step_m, step_rad),
+                )
+            )
+        return CartesianPath(
+            free,
+            pregrasp,
+            interpolate(pregrasp, grasp, step_m, step_rad),
+            interpolate(grasp, lift, step_m, step_rad),
+            options,
+            yaw,
+        )
+
+    def _track(
+        self,
+        path: CartesianPath,
+        scene: SceneWorld,
+        obj: ObjectSpec,
+        deadline: float,
+        timings: dict[str, float],
+    ) -> tuple[np.ndarray, int, int]:
+        """STPIK along the Cartesian legs, collision-checked joint transits between them.
+
+        Returns:
+            Joint trajectory [rad] (N, 7) starting at home, grasp index, release index.
+        """
+        stpik = self.stpik
+        stpik.reset_timers()
+        t0 = time.perf_counter()
+        phase = 'pre-grasp'
+
+        def loose_then_tight(n: int) -> list[bool]:
+            return [False] * (n - 1) + [True]
+
+        try:
+            seed = stpik.ready_posture(path.pregrasp.translation, self.home_q[0])
+            q_pre = stpik.converge(seed, path.pregrasp, scene, deadline=deadline)
+            phase = 'transit to pre-grasp'
+            to_pre = stpik.transit(self.home_q, q_pre, scene, deadline)
+            phase = 'approach'
+            approach = stpik.track(
+                q_pre, path.approach, scene, loose_then_tight(len(path.approach)), deadline
+            )
+            world_obj = pin.SE3(
+                pin.rpy.rpyToMatrix(0.0, 0.0, obj.yaw), np.asarray(obj.position, dtype=float)
+            )
+            stpik.bodies.attach(
+                obj,
+                path.approach[-1].actInv(world_obj),
+                settle_m=self.config.obstacle_min_distance_m + 0.002,
+            )
+            phase = 'lift'
+            lift = stpik.track(approach[-1], path.lift, scene, [False] * len(path.lift), deadline)
+            phase = 'above the drop zone'
+            for option, (above, place_leg, retreat_leg) in enumerate(path.place_options):  # noqa: B007
+                try:
+                    seed = stpik.ready_posture(above.translation, lift[-1][0])
+                    q_above = stpik.converge(seed, above, scene, deadline=deadline)
+                    break
+                except PlanningTimeout:
+                    raise
+                except MotionPlannerError:
+                    if option == len(path.place_options) - 1:
+                        raise
+            phase = 'carry'
+            carry = stpik.transit(lift[-1], q_above, scene, deadline)
+            phase = 'place'
+            place = stpik.track(
+                q_above, place_leg, scene, loose_then_tight(len(place_leg)), deadline
+            )
+            stpik.bodies.detach()
+            phase = 'retreat'
+            retreat = stpik.track(
+                place[-1], retreat_leg, scene, [False] * len(retreat_leg), deadline
+            )
+            phase = 'return home'
+            retreat = np.vstack(
+                [retreat, stpik.transit(retreat[-1], self.home_q, scene, deadline)]
+            )
+        except MotionPlannerError as err:
+            err.args = (f'{phase} at yaw {path.approach_yaw:.2f} rad: {err}',)
+            raise
+        finally:
+            stpik.bodies.detach()
+            timings['collision'] += stpik.collision_time
+            timings['stpik'] += time.perf_counter() - t0 - stpik.collision_time
+        parts = [self.home_q[None], to_pre, approach, lift, carry, place]
+        grasp_index = sum(len(p) for p in parts[:3]) - 1
+        release_index = sum(len(p) for p in parts) - 1
+        return np.vstack([*parts, retreat]), grasp_index, release_index
+
+    def _success(
+        self,
+        path: CartesianPath,
+        trajectory: np.ndarray,
+        grasp_index: int,
+        release_index: int,
+        start: float,
+        timings: dict[str, float],
+    ) -> PlanResult:
+        velocity = np.asarray(self.robot.limits.velocity) * self.config.velocity_scale
+        steps = np.max(np.abs(np.diff(trajectory, axis=0)) / velocity, axis=1)
+        times = np.concatenate([[0.0], np.cumsum(np.maximum(steps, MIN_SEGMENT_S))])
+        ee_path = np.array([pin.SE3ToXYZQUAT(self.robot.ee_pose(q)) for q in trajectory])
+        return PlanResult(
+            True,
+            Reason.SUCCESS,
+            f'feasible (approach yaw {path.approach_yaw:.2f} rad)',
+            times,
+            trajectory,
+            ee_path,
+            grasp_index,
+            release_index,
+            _since(start),
+            timings,
+            approach_yaw=path.approach_yaw,
+        )
+
+
+def _since(start: float) -> float:
+    return time.perf_counter() - start
+
+
+def _most_informative(failures: list[MotionPlannerError], object_id: str) -> MotionPlannerError:
+    """The first STPIK failure if any direction reached STPIK, else the first sampling failure."""
+    for err in failures:
+        if not isinstance(err, NoCartesianPath):
+            return err
+    if failures:
+        return failures[0]
+    return NoCartesianPath(object_id, 'no approach direction tried')

@@ -1,0 +1,67 @@
+"""Reason codes and the result of one feasibility check (no ROS import).
+
+The :class:`Reason` values equal the constants of ``qtree_msgs/srv/RelocateObject`` (nav2 style:
+``SUCCESS=0``, request errors 1xx, planning failures 2xx, run-time failures 3xx).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import IntEnum
+
+import numpy as np
+
+
+class Reason(IntEnum):
+    """Why a relocation is (in)feasible; equal to the ``RelocateObject.srv`` constants."""
+
+    SUCCESS = 0
+    UNKNOWN_OBJECT = 101
+    ALREADY_RELOCATED = 102
+    INVALID_REQUEST = 103
+    NO_SCENE = 104
+    INVALID_SCENE = 105
+    NO_CARTESIAN_PATH = 201
+    IK_NOT_CONVERGED = 202
+    JOINT_LIMIT = 203
+    SELF_COLLISION = 204
+    SCENE_COLLISION = 205
+    TIMEOUT = 301
+    EXECUTION_FAILED = 302
+
+
+def _empty(*shape: int) -> np.ndarray:
+    return np.zeros(shape)
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """Outcome of one relocation check.
+
+    Attributes:
+        feasible: True when the object can be grasped and relocated.
+        reason: :class:`Reason` code (``SUCCESS`` iff ``feasible``).
+        message: human-readable explanation.
+        times: time from start of each trajectory sample [s], shape (N,).
+        joint_trajectory: joint angles of each sample [rad], shape (N, 7).
+        ee_path: sampled Cartesian end-effector path, xyz [m] + quaternion xyzw, shape (M, 7).
+        grasp_index: trajectory index where the object is attached (-1 if none).
+        release_index: trajectory index where the object is released (-1 if none).
+        planning_time: wall time of the check [s] (of the original run when from the cache).
+        timings: wall time by stage: ``'sampling'``, ``'stpik'``, ``'collision'`` [s].
+        from_cache: True when answered from the feasibility cache.
+        approach_yaw: yaw of the approach axis used for the grasp [rad] (NaN if none).
+    """
+
+    feasible: bool
+    reason: Reason
+    message: str
+    times: np.ndarray = field(default_factory=lambda: _empty(0))
+    joint_trajectory: np.ndarray = field(default_factory=lambda: _empty(0, 7))
+    ee_path: np.ndarray = field(default_factory=lambda: _empty(0, 7))
+    grasp_index: int = -1
+    release_index: int = -1
+    planning_time: float = 0.0
+    timings: dict[str, float] = field(default_factory=dict)
+    from_cache: bool = False
+    approach_yaw: float = float('nan')

@@ -1,0 +1,24 @@
+"""Obstacle avoidance (Sect. 4, task 3) against the remaining objects, the table and statics."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from stpik_motion_planner.tasks.self_collision_task import distance_rows
+from stpik_motion_planner.tasks.task import Kinematics, SetBasedTask
+
+
+class ObstacleTask(SetBasedTask):
+    """σ = distance between a robot body and a scene object, valid above ``activation`` [m]."""
+
+    name = 'obstacles'
+
+    def __init__(self, activation: float, gain: float = 0.5) -> None:
+        super().__init__(gain)
+        self.activation = activation
+
+    def evaluate(self, k: Kinematics):
+        """Rows of the (body, object) pairs found closer than the activation distance."""
+        sigma, jacobian, labels = distance_rows(k, k.scene_pairs, second_is_robot=False)
+        lower = np.full(len(sigma), self.activation)
+        return sigma, jacobian, lower, np.full(len(sigma), np.inf), labels

@@ -1,0 +1,132 @@
+"""MotionPlanner: feasibility, reasons, trajectory validity (checked independently), cache."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import fcl
+import numpy as np
+import pytest
+from stpik_motion_planner.collision import object_geometry, object_transform
+from stpik_motion_planner.config import PlannerConfig
+from stpik_motion_planner.exceptions import InvalidConfig, InvalidRequest
+from stpik_motion_planner.planner import MotionPlanner
+from stpik_motion_planner.result import Reason
+
+
+@pytest.fixture(scope='module')
+def free_result(free_scene, robot):
+    planner = MotionPlanner(free_scene, model=robot)
+    return planner, planner.check('T', [])
+
+
+def test_free_unoccluded_object_is_feasible(free_result):
+    _, result = free_result
+    assert result.feasible and result.reason == Reason.SUCCESS
+    assert result.joint_trajectory.shape[1] == 7
+    assert len(result.times) == len(result.joint_trajectory) == len(result.ee_path)
+    assert np.all(np.diff(result.times) > 0)
+    assert 0 < result.grasp_index < result.release_index < len(result.times) - 1
+    assert set(result.timings) == {'sampling', 'stpik', 'collision'}
+
+
+def test_trajectory_starts_and_ends_home_and_grasps_the_object(free_result, robot):
+    planner, result = free_result
+    assert np.allclose(result.joint_trajectory[0], planner.home_q)
+    assert np.allclose(result.joint_trajectory[-1], planner.home_q)
+    grasp = robot.ee_pose(result.joint_trajectory[result.grasp_index])
+    # EE on the cylinder axis within 1 cm, approach axis horizontal.
+    assert np.linalg.norm(grasp.translation[:2] - [0.65, 0.0]) < 0.012
+    assert abs(grasp.rotation[2, 2]) < 0.06
+
+
+def test_trajectory_respects_limits_and_clears_the_scene(free_result, robot, free_scene):
+    _, result = free_result
+    traj = result.joint_trajectory
+    assert np.all(traj >= robot.limits.lower) and np.all(traj <= robot.limits.upper)
+    # Independent check with the model's own fcl objects against every other object.
+    others = [o for o in free_scene.objects if o.id != 'T']
+    bodies = [fcl.CollisionObject(object_geometry(o), object_transform(o)) for o in others]
+    request = fcl.DistanceRequest()
+    for q in traj:
+        robot.update_fcl(q)
+        for link, obj in robot.fcl_objects():
+            if link.endswith(('link_base', 'link_1')):
+                continue
+            for body in bodies:
+                assert fcl.distance(obj, body, request, fcl.DistanceResult()) > 0.0, link
+    assert np.all(np.min(robot.self_collision_distances(traj[0])) > 0)
+
+
+def test_boxed_in_object_is_infeasible(boxed_scene, robot):
+    result = MotionPlanner(boxed_scene, model=robot).check('T', [])
+    assert not result.feasible
+    assert result.reason in (Reason.NO_CARTESIAN_PATH, Reason.SCENE_COLLISION)
+    assert len(result.joint_trajectory) == 0
+
+
+def test_relocated_objects_are_removed_from_the_scene(boxed_scene, robot):
+    planner = MotionPlanner(boxed_scene, model=robot)
+    result = planner.check('T', [f'O{i}' for i in range(6)])
+    assert result.feasible, result.message
+
+
+def test_cache_hits_on_the_same_set_in_any_order(free_result, boxed_scene, robot):
+    planner = MotionPlanner(boxed_scene, model=robot)
+    first = planner.check('T', ['O1', 'O0'])
+    assert (planner.cache.hits, planner.cache.misses) == (0, 1)
+    second = planner.check('T', ['O0', 'O1'])
+    assert (planner.cache.hits, planner.cache.misses) == (1, 1)
+    assert second.from_cache and not first.from_cache
+    assert second.reason == first.reason
+
+
+@pytest.mark.parametrize(
+    ('object_id', 'relocated', 'reason'),
+    [
+        ('X', [], Reason.UNKNOWN_OBJECT),
+        ('T', ['X'], Reason.UNKNOWN_OBJECT),
+        ('O1', ['O1'], Reason.ALREADY_RELOCATED),
+        ('O1', ['T'], Reason.INVALID_REQUEST),
+        ('', [], Reason.INVALID_REQUEST),
+        ('T', ['O1', 'O1'], Reason.INVALID_REQUEST),
+        ('T', [''], Reason.INVALID_REQUEST),
+        ('table', [], Reason.INVALID_REQUEST),
+    ],
+)
+def test_bad_requests_get_their_reason(boxed_scene, robot, object_id, relocated, reason):
+    planner = MotionPlanner(boxed_scene, model=robot)
+    result = planner.check(object_id, relocated)
+    assert (result.feasible, result.reason) == (False, reason)
+    assert result.message
+    assert planner.cache.misses == 0
+
+
+def test_nan_scene_is_rejected(robot, make_scenario, make_cylinder):
+    bad = make_scenario(make_cylinder('T', math.nan, 0.0, 'target'))
+    with pytest.raises(InvalidRequest, match='non-finite') as info:
+        MotionPlanner(bad, model=robot)
+    assert info.value.reason == Reason.INVALID_SCENE
+
+
+def test_time_limit_gives_timeout(free_scene, robot):
+    planner = MotionPlanner(free_scene, PlannerConfig(time_limit_s=0.001), model=robot)
+    result = planner.check('T', [])
+    assert result.reason == Reason.TIMEOUT and not result.feasible
+    assert len(planner.cache) == 0  # timeouts are not cached
+
+
+def test_deterministic_for_a_seed(free_scene, robot):
+    a = MotionPlanner(free_scene, model=robot).check('T', [])
+    b = MotionPlanner(free_scene, model=robot).check('T', [])
+    assert np.array_equal(a.joint_trajectory, b.joint_trajectory)
+
+
+def test_config_rejects_out_of_range_values():
+    with pytest.raises(InvalidConfig, match='step_m'):
+        PlannerConfig(step_m=-1.0)
+    with pytest.raises(InvalidConfig, match='seed'):
+        dataclasses.replace(PlannerConfig(), seed=1.5)
+    with pytest.raises(InvalidConfig, match='obstacle_activation_m'):
+        PlannerConfig(obstacle_activation_m=0.001, obstacle_min_distance_m=0.01)

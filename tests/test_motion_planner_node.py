@@ -1,0 +1,87 @@
+"""Cross-process tests of the motion_planner node with the jaco2_sim node."""
+
+from __future__ import annotations
+
+import pytest
+from qtree_msgs.msg import ObjectState, PlanningEvent, Scene
+from qtree_msgs.srv import RelocateObject
+from stpik_motion_planner.result import Reason
+
+
+def test_reason_codes_equal_the_service_constants():
+    for reason in Reason:
+        assert getattr(RelocateObject.Response, reason.name) == reason.value
+
+
+@pytest.fixture
+def graph(launch, ros_node):
+    """sim_node (scenario s1) and motion_planner_node running, a client and the last scene."""
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    sim = launch('jaco2_sim', 'sim_node', parameters={'scenario': 's1', 'sim_rate_hz': 100.0})
+    planner = launch(
+        'stpik_motion_planner', 'motion_planner_node', parameters={'execution_timeout_s': 20.0}
+    )
+    sim.wait_for_log('ready', 30.0)
+    planner.wait_for_log('ready', 30.0)
+    planner.wait_for_log('planner rebuilt', 30.0)
+    state = {'scene': None, 'events': []}
+    qos = QoSProfile(
+        depth=1,
+        reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    )
+    ros_node.create_subscription(Scene, '/scene', lambda m: state.update(scene=m), qos)
+    ros_node.create_subscription(
+        PlanningEvent, '/motion_planner/events', lambda m: state['events'].append(m), 10
+    )
+    client = ros_node.create_client(RelocateObject, '/relocate_object')
+    return ros_node, client, state, planner
+
+
+def _call(node, client, object_id, relocated=(), execute=False, timeout_s=30.0):
+    request = RelocateObject.Request(
+        object_id=object_id, relocated_ids=list(relocated), execute=execute
+    )
+    return node.call(client, request, timeout_s)
+
+
+def test_feasible_infeasible_and_bad_requests(graph):
+    node, client, state, planner = graph
+    every_obstacle = ['O1', 'O2', 'O3', 'O4', 'O5']
+    ok = _call(node, client, 'T', every_obstacle)
+    assert ok.feasible and ok.reason == Reason.SUCCESS, ok.message
+    assert len(ok.trajectory.points) > 10 and len(ok.trajectory.joint_names) == 7
+    assert ok.planning_time > 0 and not ok.from_cache
+    again = _call(node, client, 'T', list(reversed(every_obstacle)))
+    assert again.from_cache and again.feasible
+    blocked = _call(node, client, 'T')
+    assert not blocked.feasible and blocked.reason == Reason.NO_CARTESIAN_PATH
+    for object_id, relocated, reason in [
+        ('nope', [], Reason.UNKNOWN_OBJECT),
+        ('O1', ['O1'], Reason.ALREADY_RELOCATED),
+        ('O1', ['T'], Reason.INVALID_REQUEST),
+        ('', [], Reason.INVALID_REQUEST),
+        ('T', ['O2', 'O2'], Reason.INVALID_REQUEST),
+    ]:
+        answer = _call(node, client, object_id, relocated)
+        assert (answer.feasible, answer.reason) == (False, reason), answer.message
+    assert node.spin_until(lambda: len(state['events']) >= 8, 5.0)
+    assert planner.alive()
+
+
+def test_execute_relocates_the_object_in_the_sim(graph):
+    node, client, state, _ = graph
+    answer = _call(node, client, 'T', ['O1', 'O2', 'O3', 'O4', 'O5'], execute=True, timeout_s=120)
+    assert answer.feasible, answer.message
+
+    def relocated() -> bool:
+        scene = state['scene']
+        return scene is not None and any(
+            o.id == 'T' and o.status == ObjectState.STATUS_RELOCATED for o in scene.objects
+        )
+
+    assert node.spin_until(relocated, 10.0)
+    target = next(o for o in state['scene'].objects if o.id == 'T')
+    # Released in the drop zone (centre (0, 0.5), 0.3 m wide).
+    assert abs(target.pose.position.x) < 0.2 and abs(target.pose.position.y - 0.5) < 0.2
