@@ -1,0 +1,30 @@
+"""The three scenarios have the paper's optimal relocation levels, from the geometry.
+
+The motion planner is the oracle of an exact breadth-first search over sets of relocated
+objects; nothing here says which object occludes which.
+"""
+
+from __future__ import annotations
+
+import pytest
+from jaco2_sim.scenario import load_scenario
+from qtree_task_planner.exact import solve_exact
+from qtree_task_planner.oracle import MotionPlannerOracle
+
+# scenario -> (obstacles, optimal level = depth of the target node, target included)
+EXPECTED = {'s1': (5, 4), 's2': (10, 5), 's3': (15, 6)}
+
+
+@pytest.mark.parametrize('name', sorted(EXPECTED))
+def test_optimal_level_comes_from_the_geometry(name: str) -> None:
+    scenario = load_scenario(name)
+    n_obstacles, level = EXPECTED[name]
+    assert len(scenario.obstacles) == n_obstacles
+    oracle = MotionPlannerOracle(scenario)
+    solution = solve_exact(tuple(o.id for o in scenario.obstacles), scenario.target.id, oracle)
+    assert solution.level == level, solution
+    assert solution.sequence[-1] == scenario.target.id
+    # the sequence really is feasible step by step, and no shorter prefix reaches the target
+    for index, object_id in enumerate(solution.sequence):
+        assert oracle.feasible(solution.sequence[:index], object_id)
+    assert not oracle.feasible((), scenario.target.id)
