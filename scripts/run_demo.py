@@ -27,7 +27,7 @@ from typing import Any
 
 from orchestration import LaunchError, NodeProcess, start_node, stop_all
 
-POLICIES = ('RND', 'LRND', 'H-LRND', 'H-EG', 'H-EG-SET')
+POLICIES = ('RND', 'LRND', 'H-LRND', 'H-EG', 'H-EG-SET', 'H-EG-SET-PLAIN')
 READY_TIMEOUT_S = 60.0
 
 
@@ -187,15 +187,20 @@ def retrieve_target(args: argparse.Namespace, nodes: list[NodeProcess]) -> Any:
                 status='waiting for the first episode',
             )
 
+            plain = not sys.stdout.isatty()  # CI, pipes: plain lines instead of a live bar
+            last_line = [0.0]
+
             def on_feedback(message: Any) -> None:
                 fb = message.feedback
                 best = ' → '.join(fb.best_sequence) or '-'
-                progress.update(
-                    task,
-                    completed=fb.episode,
-                    status=f'ep {fb.episode}  nodes {fb.nodes}  MP calls {fb.mp_calls}  '
-                    f'Q̄ {fb.q_bar:.1f}  ε {fb.epsilon:.3g}  best {best}',
+                status = (
+                    f'ep {fb.episode}  nodes {fb.nodes}  MP calls {fb.mp_calls}  '
+                    f'Q̄ {fb.q_bar:.1f}  ε {fb.epsilon:.3g}  best {best}'
                 )
+                progress.update(task, completed=fb.episode, status=status)
+                if plain and time.monotonic() - last_line[0] > 2.0:
+                    last_line[0] = time.monotonic()
+                    print(f'training: {status}', flush=True)
 
             goal_future = client.send_goal_async(goal, feedback_callback=on_feedback)
             handle = _spin_until_done(node, goal_future, nodes, deadline)

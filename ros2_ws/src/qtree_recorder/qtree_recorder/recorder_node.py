@@ -34,7 +34,7 @@ from qtree_recorder.qos import QosProfileData
 from qtree_recorder.recording import DEFAULT_TF_RATE_HZ, Recording
 from qtree_recorder.rerun_feed import RerunFeed
 
-SUBSCRIPTION_DEPTH = 100  # [messages] queue per recorded topic
+SUBSCRIPTION_DEPTH = 1000  # [messages] queue per recorded topic: a training bursts episodes
 IDLE_WAIT_S = 0.2  # [s] worker wake-up period when no message arrives
 
 
