@@ -1,0 +1,115 @@
+"""Conversions between the core's data and qtree_msgs messages (node side; no rclpy import)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from qtree_msgs.action import RetrieveTarget
+from qtree_msgs.msg import ObjectState, QTreeEdge, Scene, TrainingStats
+from qtree_msgs.msg import QTree as QTreeMsg
+
+from qtree_task_planner.exceptions import InvalidScenarioError
+from qtree_task_planner.extraction import greedy_path
+from qtree_task_planner.training import EpisodeStats, TrainingResult
+from qtree_task_planner.tree import QTree
+
+
+def movable_from_scene(scene: Scene) -> tuple[tuple[str, ...], str]:
+    """The action set from a /scene message: obstacles still in clutter, then the target.
+
+    Returns:
+        (movable ids, target id), obstacles in message order.
+
+    Raises:
+        InvalidScenarioError: no target, several targets, the target is not in the clutter, or
+            duplicate ids.
+    """
+    targets = [o for o in scene.objects if o.role == ObjectState.ROLE_TARGET]
+    if len(targets) != 1:
+        raise InvalidScenarioError(
+            f'scene {scene.scenario_name!r} has {len(targets)} targets, expected exactly one'
+        )
+    target = targets[0]
+    if target.status != ObjectState.STATUS_IN_CLUTTER:
+        raise InvalidScenarioError(f'target {target.id!r} is not in the clutter any more')
+    obstacles = tuple(
+        o.id
+        for o in scene.objects
+        if o.role == ObjectState.ROLE_OBSTACLE and o.status == ObjectState.STATUS_IN_CLUTTER
+    )
+    ids = (*obstacles, target.id)
+    if len(set(ids)) != len(ids):
+        raise InvalidScenarioError(f'scene {scene.scenario_name!r} has duplicate object ids')
+    return ids, target.id
+
+
+def stats_msg(stats: EpisodeStats, policy: str, stamp: Any) -> TrainingStats:
+    """A /training_stats message from one episode's statistics."""
+    return TrainingStats(
+        stamp=stamp,
+        policy=policy,
+        episode=stats.episode,
+        nodes=stats.nodes,
+        edges=stats.edges,
+        mp_calls=stats.mp_calls,
+        planner_runs=stats.planner_runs,
+        q_bar=float(stats.q_bar),
+        epsilon=float(stats.epsilon),
+        episode_sequence=list(stats.sequence),
+        reached_target=stats.reached_target,
+        best_sequence=list(stats.best_sequence),
+    )
+
+
+def feedback_msg(stats: EpisodeStats) -> RetrieveTarget.Feedback:
+    """Action feedback from one episode's statistics."""
+    return RetrieveTarget.Feedback(
+        episode=stats.episode,
+        nodes=stats.nodes,
+        edges=stats.edges,
+        mp_calls=stats.mp_calls,
+        q_bar=float(stats.q_bar),
+        epsilon=float(stats.epsilon),
+        best_sequence=list(stats.best_sequence),
+    )
+
+
+def tree_msg(tree: QTree, episode: int, stamp: Any) -> QTreeMsg:
+    """A /qtree snapshot: every node (ids joined by ',') and edge, best path marked (eq. 19)."""
+    index = {node.key: i for i, node in enumerate(tree.nodes())}
+    best = {(edge.parent, edge.action) for edge in greedy_path(tree)}
+    edges = [
+        QTreeEdge(
+            parent=index[edge.parent],
+            child=index[edge.child],
+            object_id=edge.action,
+            q=float(edge.q),
+            reward=float(edge.reward),
+            on_best_path=(edge.parent, edge.action) in best,
+        )
+        for edge in tree.edges()
+    ]
+    sequences = [','.join(node.sequence) for node in tree.nodes()]
+    return QTreeMsg(stamp=stamp, episode=episode, node_sequences=sequences, edges=edges)
+
+
+def result_msg(
+    result: TrainingResult | None, *, error_code: int, message: str, executed: bool = False
+) -> RetrieveTarget.Result:
+    """The action result; training statistics are kept even when the goal failed."""
+    msg = RetrieveTarget.Result(
+        success=error_code == RetrieveTarget.Result.SUCCESS,
+        error_code=error_code,
+        message=message,
+        executed=executed,
+        first_optimal_episode=-1,
+    )
+    if result is not None:
+        msg.sequence = list(result.sequence)
+        msg.episodes = result.episodes
+        msg.mp_calls = result.mp_calls
+        msg.planner_runs = result.planner_runs
+        msg.first_optimal_episode = result.first_optimal_episode
+        msg.converged = result.converged
+        msg.training_time = float(result.wall_time_s)
+    return msg

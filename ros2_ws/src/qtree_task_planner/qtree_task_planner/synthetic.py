@@ -1,0 +1,77 @@
+"""Synthetic feasibility tables for tests and development (never for reported results).
+
+Feasibility in reported results always comes from the real geometry through the motion planner;
+these tables only exercise the learner: a hand-made toy scene and seeded random tables.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from qtree_task_planner.oracle import TableOracle
+
+TOY_OBSTACLES = ('O1', 'O2', 'O3', 'O4', 'O5')
+TOY_MOVABLE = (*TOY_OBSTACLES, 'T')
+# T needs {O1, O2, O3} gone (optimal level 4) or {O1, O2, O4, O5} gone (level 5);
+# O1 needs O2 or O4 gone; O3 needs O2 gone; O2, O4, O5 are free.
+TOY_REQUIREMENTS: dict[str, list[set[str]]] = {
+    'T': [{'O1', 'O2', 'O3'}, {'O1', 'O2', 'O4', 'O5'}],
+    'O1': [{'O2'}, {'O4'}],
+    'O3': [{'O2'}],
+}
+TOY_OPTIMAL_LEVEL = 4
+
+
+def toy_oracle() -> TableOracle:
+    """A fresh oracle of the toy 5-obstacle scene."""
+    return TableOracle(TOY_REQUIREMENTS)
+
+
+def random_requirements(
+    n_obstacles: int, rng: np.random.Generator, *, max_sets: int = 2, p_blocked: float = 0.4
+) -> tuple[tuple[str, ...], dict[str, list[set[str]]]]:
+    """A random table: each object is blocked with probability ``p_blocked``; a blocked object
+    gets 1..``max_sets`` clearing sets, each a random non-empty subset of the other obstacles.
+    The target is always blocked.
+
+    Args:
+        n_obstacles: N_o >= 1.
+        rng: random generator.
+        max_sets: maximum clearing sets per blocked object.
+        p_blocked: probability that an obstacle is blocked.
+
+    Returns:
+        (obstacle ids ``O1..ON``, requirements for :class:`TableOracle`).
+    """
+    obstacles = tuple(f'O{i + 1}' for i in range(n_obstacles))
+    requirements: dict[str, list[set[str]]] = {}
+    for obj in (*obstacles, 'T'):
+        if obj != 'T' and rng.random() >= p_blocked:
+            continue
+        others = [o for o in obstacles if o != obj]
+        sets = []
+        for _ in range(int(rng.integers(1, max_sets + 1))):
+            if not others:
+                break
+            size = int(rng.integers(1, min(3, len(others)) + 1))
+            sets.append({others[i] for i in rng.choice(len(others), size, replace=False)})
+        requirements[obj] = sets
+    return obstacles, requirements
+
+
+# Seeds of :func:`random_requirements` (p_blocked=0.6) giving scenes shaped like the paper's:
+# N_o = 5 / 10 / 15 with optimal levels 4 / 5 / 6 and a unique or rare optimum.
+SYNTHETIC_SCENARIOS = {'s1': (5, 4), 's2': (10, 3), 's3': (15, 155)}
+
+
+def synthetic_scenario(name: str) -> tuple[tuple[str, ...], dict[str, list[set[str]]]]:
+    """A synthetic stand-in of scenario ``name`` (``'s1'``, ``'s2'``, ``'s3'``).
+
+    Returns:
+        (obstacle ids, requirements for :class:`TableOracle`); the target is ``'T'``.
+
+    Raises:
+        KeyError: unknown name.
+    """
+    n_obstacles, seed = SYNTHETIC_SCENARIOS[name]
+    return random_requirements(n_obstacles, np.random.default_rng(seed), p_blocked=0.6)

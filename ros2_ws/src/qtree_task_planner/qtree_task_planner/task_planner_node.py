@@ -1,0 +1,271 @@
+"""ROS 2 node ``task_planner``: the Q-Tree learner served as the ``/retrieve_target`` action.
+
+Training runs inside the (synchronous) execute callback on a MultiThreadedExecutor; every new tree
+edge is one ``/relocate_object`` call (execute=false) made with ``call_async`` and waited for on a
+threading.Event, so the response is handled by another executor thread.
+
+Failure behaviour (result ``error_code`` and ``message`` always say why; the node keeps running):
+invalid goal field -> INVALID_GOAL (accepted then aborted, the message names the field); another
+goal running -> INVALID_GOAL ("busy"); no /scene in time, no /relocate_object service, a call
+timing out or a request rejected by the planner (reason 1xx, e.g. unknown object) ->
+MOTION_PLANNER_UNAVAILABLE, with the statistics learned so far in the result; scene
+without a target in the clutter or no sequence learned -> NO_SOLUTION; cancel -> CANCELED (checked
+once per episode); an execution step failing -> EXECUTION_FAILED.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import rclpy
+from qtree_msgs.action import RetrieveTarget
+from qtree_msgs.msg import QTree as QTreeMsg
+from qtree_msgs.msg import Scene, TrainingStats
+from qtree_msgs.srv import RelocateObject
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+from rclpy.action import ActionServer, CancelResponse
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from qtree_task_planner.exceptions import (
+    InvalidParameterError,
+    InvalidScenarioError,
+    OracleUnavailableError,
+)
+from qtree_task_planner.goal import settings_from_goal
+from qtree_task_planner.messages import (
+    feedback_msg,
+    movable_from_scene,
+    result_msg,
+    stats_msg,
+    tree_msg,
+)
+from qtree_task_planner.training import STOP_CANCELLED, QTreeTrainer
+
+LATCHED_QOS = QoSProfile(  # /scene and /qtree: late joiners get the last message
+    depth=1,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+STATS_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # bursts of episodes
+Result = RetrieveTarget.Result
+_TIMEOUTS = {  # name: (default [s], description)
+    'planner_timeout_s': (30.0, 'timeout of one feasibility RelocateObject call [s]'),
+    'planner_wait_s': (10.0, 'wait for the /relocate_object service at goal start [s]'),
+    'execute_timeout_s': (180.0, 'timeout of one RelocateObject call with execute=true [s]'),
+    'scene_wait_s': (10.0, 'wait for a /scene message at goal start [s]'),
+}
+
+
+def _wait(future: rclpy.task.Future, timeout_s: float) -> bool:
+    """Block this thread until ``future`` is done (another executor thread completes it)."""
+    done = threading.Event()
+    future.add_done_callback(lambda _: done.set())
+    return done.wait(timeout_s) or future.done()
+
+
+class RosPlannerOracle:
+    """Feasibility oracle over the ``/relocate_object`` service (execute=false).
+
+    Planning failures (reason 2xx) and planner time-outs (3xx) are "cannot relocate" (-1 of
+    eq. 8). Request errors (1xx: unknown object, invalid request, no or invalid scene) are not
+    answers about feasibility: NO_SCENE is retried for ``scene_wait_s``, the others raise.
+
+    Attributes:
+        planner_runs: answers not served from the motion planner's cache (``from_cache``).
+    """
+
+    def __init__(self, client: rclpy.client.Client, timeout_s: float, scene_wait_s: float) -> None:
+        self.client = client
+        self.timeout_s = timeout_s
+        self.scene_wait_s = scene_wait_s
+        self.planner_runs = 0
+
+    def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
+        """Ask the motion planner.
+
+        Raises:
+            OracleUnavailableError: no answer in time, or the request was rejected.
+        """
+        request = RelocateObject.Request(
+            object_id=object_id, relocated_ids=list(relocated), execute=False
+        )
+        deadline = time.monotonic() + self.scene_wait_s
+        while True:
+            future = self.client.call_async(request)
+            if not _wait(future, self.timeout_s) or future.result() is None:
+                future.cancel()
+                detail = f'no answer in {self.timeout_s} s'
+                raise OracleUnavailableError(object_id, relocated, detail)
+            response = future.result()
+            if response.reason != RelocateObject.Response.NO_SCENE:
+                break
+            if time.monotonic() > deadline:
+                raise OracleUnavailableError(object_id, relocated, response.message)
+            time.sleep(0.2)  # the planner has not received /scene yet
+        if 100 <= response.reason < 200:
+            detail = f'request rejected (reason {response.reason}): {response.message}'
+            raise OracleUnavailableError(object_id, relocated, detail)
+        self.planner_runs += not response.from_cache
+        return bool(response.feasible)
+
+
+class TaskPlannerNode(Node):
+    """Serves RetrieveTarget goals (see the module docstring for the failure behaviour)."""
+
+    def __init__(self) -> None:
+        super().__init__('task_planner')
+        for name, (default, description) in _TIMEOUTS.items():
+            rng = FloatingPointRange(from_value=0.1, to_value=3600.0)
+            descriptor = ParameterDescriptor(description=description, floating_point_range=[rng])
+            self.declare_parameter(name, default, descriptor)
+        self.add_on_set_parameters_callback(self._check_parameters)
+        self._group = ReentrantCallbackGroup()
+        self._scene: Scene | None = None
+        self._busy = threading.Lock()
+        self.create_subscription(Scene, '/scene', self._on_scene, LATCHED_QOS)
+        self._stats_pub = self.create_publisher(TrainingStats, '/training_stats', STATS_QOS)
+        self._tree_pub = self.create_publisher(QTreeMsg, '/qtree', LATCHED_QOS)
+        self._planner = self.create_client(
+            RelocateObject, '/relocate_object', callback_group=self._group
+        )
+        self._server = ActionServer(
+            self,
+            RetrieveTarget,
+            '/retrieve_target',
+            execute_callback=self._execute,
+            cancel_callback=lambda _: CancelResponse.ACCEPT,
+            callback_group=self._group,
+        )
+        self.get_logger().info('task planner ready: action /retrieve_target')
+
+    def _check_parameters(self, params: list) -> SetParametersResult:
+        for param in params:
+            if param.name in _TIMEOUTS and not (
+                isinstance(param.value, float) and 0.1 <= param.value <= 3600.0
+            ):
+                reason = f'{param.name} must be a float in [0.1, 3600] s, got {param.value!r}'
+                return SetParametersResult(successful=False, reason=reason)
+        return SetParametersResult(successful=True)
+
+    def _on_scene(self, msg: Scene) -> None:
+        self._scene = msg
+
+    def _param(self, name: str) -> float:
+        return float(self.get_parameter(name).value)
+
+    def _execute(self, goal_handle) -> Result:
+        if not self._busy.acquire(blocking=False):
+            goal_handle.abort()
+            return result_msg(None, error_code=Result.INVALID_GOAL, message='busy with a goal')
+        try:
+            code, message, result, executed = self._run(goal_handle)
+        finally:
+            self._busy.release()
+        self.get_logger().info(f'goal finished: {message}')
+        msg = result_msg(result, error_code=code, message=message, executed=executed)
+        if code == Result.SUCCESS:
+            goal_handle.succeed()
+        elif code == Result.CANCELED:
+            goal_handle.canceled()
+        else:
+            goal_handle.abort()
+        return msg
+
+    def _run(self, goal_handle) -> tuple:
+        try:
+            settings = settings_from_goal(goal_handle.request)
+        except InvalidParameterError as err:
+            return Result.INVALID_GOAL, str(err), None, False
+        deadline_ok = self._wait_for(lambda: self._scene is not None, self._param('scene_wait_s'))
+        if not deadline_ok:
+            msg = 'no /scene received (is jaco2_sim running?)'
+            return Result.MOTION_PLANNER_UNAVAILABLE, msg, None, False
+        try:
+            movable, target = movable_from_scene(self._scene)
+        except InvalidScenarioError as err:
+            return Result.NO_SOLUTION, str(err), None, False
+        if not self._planner.wait_for_service(timeout_sec=self._param('planner_wait_s')):
+            msg = 'service /relocate_object not available'
+            return Result.MOTION_PLANNER_UNAVAILABLE, msg, None, False
+        oracle = RosPlannerOracle(
+            self._planner, self._param('planner_timeout_s'), self._param('scene_wait_s')
+        )
+        trainer = QTreeTrainer(movable, target, oracle, settings.config)
+        every = settings.feedback_every
+
+        def on_episode(stats) -> bool:
+            now = self.get_clock().now().to_msg()
+            self._stats_pub.publish(stats_msg(stats, trainer.policy.name, now))
+            if stats.episode % every == 0:
+                goal_handle.publish_feedback(feedback_msg(stats))
+                self._tree_pub.publish(tree_msg(trainer.tree, stats.episode, now))
+            return not goal_handle.is_cancel_requested
+
+        try:
+            result = trainer.run(on_episode)
+        except OracleUnavailableError as err:
+            partial = trainer.result('motion_planner_unavailable')
+            return Result.MOTION_PLANNER_UNAVAILABLE, str(err), partial, False
+        finally:
+            stamp = self.get_clock().now().to_msg()
+            self._tree_pub.publish(tree_msg(trainer.tree, trainer.episode, stamp))
+        if result.stop_reason == STOP_CANCELLED:
+            return Result.CANCELED, f'canceled after {result.episodes} episodes', result, False
+        if not result.sequence:
+            msg = f'no feasible sequence learned in {result.episodes} episodes'
+            return Result.NO_SOLUTION, msg, result, False
+        summary = (
+            f'{result.policy}: {list(result.sequence)} after {result.episodes} episodes, '
+            f'{result.mp_calls} MP calls ({result.stop_reason})'
+        )
+        if not settings.execute:
+            return Result.SUCCESS, summary, result, False
+        error = self._execute_sequence(result.sequence)
+        if error:
+            return Result.EXECUTION_FAILED, error, result, False
+        return Result.SUCCESS, summary + ', executed', result, True
+
+    def _execute_sequence(self, sequence: tuple[str, ...]) -> str:
+        """Relocate each object on the arm; returns an error message or ''."""
+        timeout_s = self._param('execute_timeout_s')
+        for i, object_id in enumerate(sequence):
+            request = RelocateObject.Request(
+                object_id=object_id, relocated_ids=list(sequence[:i]), execute=True
+            )
+            future = self._planner.call_async(request)
+            if not _wait(future, timeout_s) or future.result() is None:
+                return f'executing {object_id!r}: no answer in {timeout_s} s'
+            if not future.result().feasible:
+                return f'executing {object_id!r} failed: {future.result().message}'
+        return ''
+
+    def _wait_for(self, predicate, timeout_s: float) -> bool:
+        event = threading.Event()
+        while not predicate() and timeout_s > 0:
+            event.wait(0.05)
+            timeout_s -= 0.05
+        return predicate()
+
+
+def main(args: list[str] | None = None) -> None:
+    """Run the node until Ctrl-C (exit code 0)."""
+    rclpy.init(args=args)
+    node = TaskPlannerNode()
+    executor = MultiThreadedExecutor(num_threads=4)
+    executor.add_node(node)
+    try:
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    main()

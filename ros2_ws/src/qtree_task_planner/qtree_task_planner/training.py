@@ -1,0 +1,348 @@
+"""Q-Tree training, Algorithm 1 of the paper, with Q-bar (eq. 10) and the steady state (eq. 11).
+
+Each episode starts at the root s_H, chooses actions with the policy, asks the feasibility oracle
+ONLY when an edge is new (the motion planner is activated only for new nodes, Sect. 3.2.2, so MP
+calls = edges), initialises a new edge to its reward, updates a revisited edge with eq. (5),
+aborts on a -1 reward and stops when the target was tried.
+
+Steady state (eq. 11): |Q-bar(k) - Q-bar(k-1)| <= beta must hold, with no new edge (hence no new
+node), for ``steady_episodes`` consecutive episodes. A single episode is not enough: an episode
+that walks into an already-known -1 edge, or through zero-valued edges, changes neither the tree
+nor Q-bar, so eq. (11) on one episode would stop training at the first such episode, long before
+the reward of the target has propagated to the root. Training also stops at Ep_max.
+
+RND (no learning) does not update Q and stops at the first episode that reaches the target.
+H-EG-SET (ours) additionally runs :meth:`QTree.sweep` before extracting the sequence.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from qtree_task_planner.exceptions import InvalidParameterError
+from qtree_task_planner.extraction import best_known_sequence, extract_sequence
+from qtree_task_planner.oracle import FeasibilityOracle
+from qtree_task_planner.policies import Policy, make_policy
+from qtree_task_planner.rewards import reward
+from qtree_task_planner.tree import QTree
+
+STOP_STEADY = 'steady_state'
+STOP_MAX_EPISODES = 'max_episodes'
+STOP_TARGET = 'target_reached'  # RND only
+STOP_CANCELLED = 'cancelled'
+STOP_TIME = 'time_limit'
+
+
+@dataclass(frozen=True)
+class TrainingConfig:
+    """Hyper-parameters of one training (defaults: Sect. 4 of the paper).
+
+    Attributes:
+        policy: RND, LRND, H-LRND, H-EG or H-EG-SET.
+        max_episodes: Ep_max.
+        seed: seed of the ``numpy.random.Generator``.
+        alpha: learning rate of eq. (5), in (0, 1].
+        gamma: discount of eq. (5), in (0, 1].
+        epsilon0: eps_0 of eq. (9), in (0, 1].
+        epsilon_min: eps_min of eq. (9), in (0, eps_0].
+        beta: threshold of eq. (11) [reward units], > 0.
+        steady_episodes: consecutive episodes eq. (11) must hold, >= 1.
+        time_limit_s: optional wall-time cap [s] (used for RND).
+        optimal_level: known optimal level (exact reference) for the first-optimal episode; when
+            None, the level of the finally extracted sequence is used.
+    """
+
+    policy: str = 'H-EG'
+    max_episodes: int = 5000
+    seed: int = 0
+    alpha: float = 0.5
+    gamma: float = 0.9
+    epsilon0: float = 1.0
+    epsilon_min: float = 1e-4
+    beta: float = 1e-3
+    steady_episodes: int = 50
+    time_limit_s: float | None = None
+    optimal_level: int | None = None
+
+    def __post_init__(self) -> None:
+        """Validate every field.
+
+        Raises:
+            InvalidParameterError: a field out of range (names the field).
+        """
+        for name in ('alpha', 'gamma'):
+            value = getattr(self, name)
+            if not 0.0 < value <= 1.0:
+                raise InvalidParameterError(name, value, 'must be in (0, 1]')
+        if self.max_episodes <= 0:
+            raise InvalidParameterError('max_episodes', self.max_episodes, 'must be > 0')
+        if not self.beta > 0.0:
+            raise InvalidParameterError('beta', self.beta, 'must be > 0')
+        if self.steady_episodes <= 0:
+            raise InvalidParameterError('steady_episodes', self.steady_episodes, 'must be > 0')
+        if self.time_limit_s is not None and not self.time_limit_s > 0.0:
+            raise InvalidParameterError('time_limit_s', self.time_limit_s, 'must be > 0')
+
+
+@dataclass(frozen=True)
+class EpisodeStats:
+    """Statistics after one episode (published on /training_stats).
+
+    Attributes:
+        episode: k, 1-based.
+        nodes: tree nodes (root included).
+        edges: tree edges.
+        mp_calls: motion-planner calls as the paper counts them (= edges).
+        planner_runs: real planner runs after caching, since the training started.
+        q_bar: Q-bar(k) of eq. (10) [reward units].
+        epsilon: eps(k) of eq. (9) (1 for the random policies).
+        sequence: objects chosen in this episode (the last may have failed).
+        reached_target: the target was relocated in this episode.
+        new_edges: edges created in this episode.
+        best_sequence: eq. (19) extraction after this episode (``()`` if none).
+    """
+
+    episode: int
+    nodes: int
+    edges: int
+    mp_calls: int
+    planner_runs: int
+    q_bar: float
+    epsilon: float
+    sequence: tuple[str, ...]
+    reached_target: bool
+    new_edges: int
+    best_sequence: tuple[str, ...]
+
+
+@dataclass
+class TrainingResult:
+    """Outcome of a training.
+
+    Attributes:
+        policy: the policy's canonical name.
+        sequence: learned sequence (RND: the first sequence that reached the target); ``()``
+            if none.
+        episodes: episodes run.
+        mp_calls: edges at the end (the paper's MP calls).
+        planner_runs: real planner runs after caching.
+        converged: the steady state of eq. (11) was reached.
+        stop_reason: one of the ``STOP_*`` constants.
+        first_optimal_episode: first episode reaching the target through a sequence of the
+            optimal level, -1 if never.
+        optimal_level: the level used for ``first_optimal_episode`` (0 if unknown).
+        wall_time_s: training time [s].
+        history: per-episode statistics.
+    """
+
+    policy: str
+    sequence: tuple[str, ...]
+    episodes: int
+    mp_calls: int
+    planner_runs: int
+    converged: bool
+    stop_reason: str
+    first_optimal_episode: int
+    optimal_level: int
+    wall_time_s: float
+    history: list[EpisodeStats] = field(repr=False)
+
+    @property
+    def success(self) -> bool:
+        """A sequence ending with the target was found."""
+        return bool(self.sequence)
+
+
+def first_optimal_episode(history: list[EpisodeStats], optimal_level: int) -> int:
+    """First episode that reached the target through a sequence of ``optimal_level`` objects.
+
+    Returns:
+        The 1-based episode, or -1 if none.
+    """
+    for stats in history:
+        if stats.reached_target and len(stats.sequence) == optimal_level:
+            return stats.episode
+    return -1
+
+
+EpisodeCallback = Callable[[EpisodeStats], bool]
+
+
+class QTreeTrainer:
+    """Runs Algorithm 1 episode by episode; its state stays readable after an error.
+
+    Args:
+        movable_ids: the action set, obstacles then target (``Scenario.movable_ids``).
+        target_id: id of the target T.
+        oracle: feasibility oracle (motion planner).
+        config: hyper-parameters.
+
+    Raises:
+        InvalidParameterError: bad configuration or unknown policy.
+    """
+
+    def __init__(
+        self,
+        movable_ids: tuple[str, ...],
+        target_id: str,
+        oracle: FeasibilityOracle,
+        config: TrainingConfig,
+    ) -> None:
+        self.config = config
+        self.oracle = oracle
+        self.policy: Policy = make_policy(
+            config.policy,
+            tuple(movable_ids),
+            target_id,
+            epsilon0=config.epsilon0,
+            epsilon_min=config.epsilon_min,
+            max_episodes=config.max_episodes,
+        )
+        self.tree = QTree(
+            target_id,
+            config.alpha,
+            config.gamma,
+            share_sets=self.policy.share_sets,
+            optimistic_over=tuple(movable_ids) if self.policy.optimistic else None,
+        )
+        self.rng = np.random.default_rng(config.seed)
+        self.history: list[EpisodeStats] = []
+        self._runs_at_start = oracle.planner_runs
+        self._steady_count = 0
+        self._started = time.monotonic()
+
+    @property
+    def episode(self) -> int:
+        """Episodes run so far."""
+        return len(self.history)
+
+    @property
+    def converged(self) -> bool:
+        """Eq. (11) held for ``steady_episodes`` consecutive episodes without new edges."""
+        return self._steady_count >= self.config.steady_episodes
+
+    def run_episode(self) -> EpisodeStats:
+        """Run one episode from the root (Algorithm 1, lines 3-10).
+
+        Raises:
+            OracleUnavailableError: the oracle gave no answer (the tree keeps what was learned).
+        """
+        tree, policy = self.tree, self.policy
+        k = self.episode + 1
+        q_bar_before = tree.q_bar
+        key = tree.root.key
+        sequence: list[str] = []
+        new_edges, reached = 0, False
+        while True:
+            action = policy.select(tree, key, self.rng, k)  # line 5
+            if action is None:  # dead end: every remaining action failed here
+                break
+            edge = tree.node(key).children.get(action)
+            if edge is None:  # new edge: ask the motion planner (lines 6-9)
+                feasible = self.oracle.feasible(tuple(sequence), action)
+                edge, _ = tree.add_edge(key, action, reward(action, tree.target_id, feasible))
+                new_edges += 1
+            elif policy.learns:  # revisited edge: eq. (5) (line 10)
+                tree.update(edge)
+            sequence.append(action)
+            if not edge.feasible:  # -1: abort the episode
+                break
+            if action == tree.target_id:
+                reached = True
+                break
+            key = edge.child
+        if k % 500 == 0:
+            tree.recompute_q_bar()
+        steady = new_edges == 0 and abs(tree.q_bar - q_bar_before) <= self.config.beta  # eq. (11)
+        self._steady_count = self._steady_count + 1 if steady else 0
+        stats = EpisodeStats(
+            episode=k,
+            nodes=tree.num_nodes,
+            edges=tree.num_edges,
+            mp_calls=tree.num_edges,
+            planner_runs=self.oracle.planner_runs - self._runs_at_start,
+            q_bar=tree.q_bar,
+            epsilon=policy.epsilon(k),
+            sequence=tuple(sequence),
+            reached_target=reached,
+            new_edges=new_edges,
+            best_sequence=self._best_sequence(),
+        )
+        self.history.append(stats)
+        return stats
+
+    def _best_sequence(self) -> tuple[str, ...]:
+        """Eq. (19) after this episode (known values for the optimistic H-EG-SET)."""
+        if not self.policy.learns:
+            return ()
+        if self.policy.optimistic:
+            return best_known_sequence(self.tree)
+        return extract_sequence(self.tree)
+
+    def run(self, callback: EpisodeCallback | None = None) -> TrainingResult:
+        """Train until the steady state, Ep_max, the time limit, or (RND) the target.
+
+        Args:
+            callback: called after each episode with its statistics; returning False cancels.
+
+        Returns:
+            The result (``stop_reason`` says why training ended).
+
+        Raises:
+            OracleUnavailableError: the oracle gave no answer; call :meth:`result` for the partial
+                statistics.
+        """
+        config = self.config
+        while True:
+            stats = self.run_episode()
+            if callback is not None and callback(stats) is False:
+                return self.result(STOP_CANCELLED)
+            if not self.policy.learns and stats.reached_target:
+                return self.result(STOP_TARGET)
+            if self.policy.learns and self.converged:
+                return self.result(STOP_STEADY)
+            if self.episode >= config.max_episodes:
+                return self.result(STOP_MAX_EPISODES)
+            elapsed = time.monotonic() - self._started
+            if config.time_limit_s is not None and elapsed > config.time_limit_s:
+                return self.result(STOP_TIME)
+
+    def result(self, stop_reason: str) -> TrainingResult:
+        """The result so far (also usable after an :class:`OracleUnavailableError`)."""
+        if self.policy.learns:
+            if self.policy.share_sets:  # H-EG-SET: converge the known values before eq. (19)
+                self.tree.sweep()
+            sequence = extract_sequence(self.tree)
+        else:
+            last = self.history[-1] if self.history else None
+            sequence = last.sequence if last is not None and last.reached_target else ()
+        level = self.config.optimal_level or len(sequence)
+        first = first_optimal_episode(self.history, level) if level else -1
+        return TrainingResult(
+            policy=self.policy.name,
+            sequence=sequence,
+            episodes=self.episode,
+            mp_calls=self.tree.num_edges,
+            planner_runs=self.oracle.planner_runs - self._runs_at_start,
+            converged=self.policy.learns and self.converged,
+            stop_reason=stop_reason,
+            first_optimal_episode=first,
+            optimal_level=level,
+            wall_time_s=time.monotonic() - self._started,
+            history=self.history,
+        )
+
+
+def train(
+    movable_ids: tuple[str, ...],
+    target_id: str,
+    oracle: FeasibilityOracle,
+    config: TrainingConfig,
+    callback: EpisodeCallback | None = None,
+) -> TrainingResult:
+    """Build a :class:`QTreeTrainer` and run it (see there)."""
+    return QTreeTrainer(movable_ids, target_id, oracle, config).run(callback)

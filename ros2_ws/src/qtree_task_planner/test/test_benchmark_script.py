@@ -1,0 +1,52 @@
+"""scripts/benchmark.py end to end on the synthetic tables (fast; no motion planner)."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+benchmark = pytest.importorskip('benchmark')  # scripts/ is on the pytest pythonpath
+
+
+def test_synthetic_benchmark_writes_tables_and_plots(tmp_path: Path) -> None:
+    code = benchmark.main(
+        [
+            '--oracle',
+            'synthetic',
+            '--trainings',
+            '2',
+            '--workers',
+            '1',
+            '--scenarios',
+            's1',
+            's2',
+            '--out',
+            str(tmp_path),
+            '--tag',
+            '_t',
+        ]
+    )
+    assert code == 0
+    data = json.loads((tmp_path / 'benchmark_t.json').read_text())
+    assert data['meta']['scenarios']['s1']['level'] == 4
+    assert data['meta']['scenarios']['s2']['level'] == 5
+    assert len(data['records']) == 2 * 2 * 5  # scenarios x trainings x default policies
+    for record in data['records']:
+        if record['policy'] != 'RND':
+            assert record['sequence'][-1] == 'T' and record['mp_calls'] > 0
+        assert record['planner_runs_fresh'] <= record['mp_calls']
+        assert bool(record['q_bar_curve']) == (record['seed'] == 0)  # first seed only
+    rows = {(r['scenario'], r['policy']): r for r in data['summary']}
+    assert rows[('s1', 'H-EG-SET')]['optimal_share'] == 1.0
+    assert rows[('s1', 'H-EG')]['paper'] == [115, 34, 16]
+    report = (tmp_path / 'benchmark_t.md').read_text()
+    assert '| H-EG | ' in report and '115 / 34 / 16' in report
+    for name in ('fig4_first_optimal', 'fig5_episodes', 'mp_calls', 'q_bar_curves'):
+        assert (tmp_path / f't_{name}.png').stat().st_size > 1000
+
+
+def test_bad_arguments_are_rejected() -> None:
+    with pytest.raises(SystemExit):
+        benchmark.parse_args(['--trainings', '0'])
+    with pytest.raises(SystemExit):
+        benchmark.parse_args(['--ros', '--oracle', 'synthetic'])

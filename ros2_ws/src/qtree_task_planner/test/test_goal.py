@@ -1,0 +1,71 @@
+"""RetrieveTarget goal validation: every bad field is named in the error."""
+
+from types import SimpleNamespace
+
+import pytest
+from qtree_task_planner.exceptions import InvalidParameterError, UnknownPolicyError
+from qtree_task_planner.goal import settings_from_goal
+
+DEFAULTS = dict(
+    policy='H-EG',
+    max_episodes=5000,
+    seed=0,
+    alpha=0.5,
+    gamma=0.9,
+    epsilon0=1.0,
+    epsilon_min=1e-4,
+    beta=1e-3,
+    steady_episodes=50,
+    execute=False,
+    feedback_every=10,
+)
+
+
+def _goal(**changes) -> SimpleNamespace:
+    return SimpleNamespace(**{**DEFAULTS, **changes})
+
+
+def test_defaults_are_the_papers() -> None:
+    settings = settings_from_goal(_goal(policy='h-εg', seed=7))
+    config = settings.config
+    assert (config.policy, config.alpha, config.gamma, config.max_episodes) == (
+        'H-EG',
+        0.5,
+        0.9,
+        5000,
+    )
+    assert config.seed == 7 and settings.feedback_every == 10 and not settings.execute
+
+
+@pytest.mark.parametrize(
+    ('field', 'value'),
+    [
+        ('alpha', 0.0),
+        ('alpha', 1.01),
+        ('gamma', 0.0),
+        ('gamma', 2.0),
+        ('epsilon0', 0.0),
+        ('epsilon0', 1.5),
+        ('epsilon_min', 0.0),
+        ('epsilon_min', 1.1),
+        ('max_episodes', 0),
+        ('max_episodes', -3),
+        ('beta', 0.0),
+        ('beta', -1.0),
+        ('feedback_every', 0),
+        ('steady_episodes', 0),
+    ],
+)
+def test_bad_fields_are_named(field: str, value: float) -> None:
+    with pytest.raises(InvalidParameterError, match=f'invalid {field}='):
+        settings_from_goal(_goal(**{field: value}))
+
+
+def test_epsilon_min_above_epsilon0() -> None:
+    with pytest.raises(InvalidParameterError, match=r'epsilon_min.*epsilon0'):
+        settings_from_goal(_goal(epsilon0=0.1, epsilon_min=0.2))
+
+
+def test_unknown_policy() -> None:
+    with pytest.raises(UnknownPolicyError, match=r"invalid policy='SARSA'.*H-EG-SET"):
+        settings_from_goal(_goal(policy='SARSA'))
