@@ -53,7 +53,7 @@ def test_pure_translation_of_ee_translates_object(world: World) -> None:
     world.update(pin.SE3(np.eye(3), np.array([0.5, 0.2, 0.4])))
     start = np.array(world.state('T').spec.position)
     np.testing.assert_allclose(
-        world.state('T').pose.translation, start + [0.0, 0.2, 0.1], atol=1e-12
+        world.state('T').pose.translation, start + np.array([0.0, 0.2, 0.1]), atol=1e-12
     )
 
 
