@@ -164,6 +164,14 @@ class TaskPlannerNode(Node):
             return result_msg(None, error_code=Result.INVALID_GOAL, message='busy with a goal')
         try:
             code, message, result, executed = self._run(goal_handle)
+        except Exception as err:  # a bug must end the goal with a reason, never hang the client
+            self.get_logger().error(f'goal failed with an internal error: {err!r}')
+            code, message, result, executed = (
+                Result.INTERNAL_ERROR,
+                f'internal error: {err}',
+                None,
+                False,
+            )
         finally:
             self._busy.release()
         self.get_logger().info(f'goal finished: {message}')

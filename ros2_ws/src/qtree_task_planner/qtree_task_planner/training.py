@@ -80,6 +80,8 @@ class TrainingConfig:
                 raise InvalidParameterError(name, value, 'must be in (0, 1]')
         if self.max_episodes <= 0:
             raise InvalidParameterError('max_episodes', self.max_episodes, 'must be > 0')
+        if self.seed < 0:
+            raise InvalidParameterError('seed', self.seed, 'must be >= 0 (a numpy seed)')
         if not self.beta > 0.0:
             raise InvalidParameterError('beta', self.beta, 'must be > 0')
         if self.steady_episodes <= 0:

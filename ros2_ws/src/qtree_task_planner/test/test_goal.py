@@ -54,6 +54,7 @@ def test_defaults_are_the_papers() -> None:
         ('beta', -1.0),
         ('feedback_every', 0),
         ('steady_episodes', 0),
+        ('seed', -1),
     ],
 )
 def test_bad_fields_are_named(field: str, value: float) -> None:
