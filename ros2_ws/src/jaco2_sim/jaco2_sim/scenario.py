@@ -28,13 +28,18 @@ YAML schema (lengths [m], angles [rad]; unknown keys are errors)::
 
 Validation also rejects NaN/inf anywhere, objects whose footprints overlap each other or the
 drop zone, and objects or a drop zone inside the robot keep-out disc. Every error is a
-:class:`ScenarioError` naming the file, the field (``objects[2].radius``) and the problem.
+:class:`ScenarioError` naming the file, the field (``objects[2].radius``) and the problem, whatever
+the type of the bad value (``shape: [cylinder]`` → "expected a string, got list"; a 400-digit
+integer → "too large for a float"; ``true`` is not a number). Keys that are not plain names are
+quoted in the field (``objects[0]['']``).
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 import pathlib
+import reprlib
 from collections.abc import Callable
 from typing import Any
 
@@ -52,6 +57,10 @@ _TOP = {'name', 'description', 'home', 'robot_keepout_radius', 'table', 'drop_zo
 _BOX = {'center_xy', 'size'}
 _OBJECT = {'id', 'role', 'shape', 'xy', 'radius', 'height', 'size', 'yaw'}
 _SHAPE_KEYS = {'cylinder': {'radius', 'height'}, 'box': {'size'}}
+_ROLES = ('target', 'obstacle', 'static')
+_MAX_SHOWN = 60  # characters of a bad value quoted in an error message
+_REPR = reprlib.Repr()
+_REPR.maxlevel, _REPR.maxstring, _REPR.maxother = 3, _MAX_SHOWN, _MAX_SHOWN
 
 
 def list_scenarios() -> list[str]:
@@ -63,12 +72,18 @@ def resolve_scenario(name_or_path: str) -> pathlib.Path:
     """File of an installed scenario name, or ``name_or_path`` itself if it is a file.
 
     Raises:
-        ScenarioError: neither an installed name nor an existing file.
+        ScenarioError: not a string, or neither an installed name nor an existing file.
     """
+    if not isinstance(name_or_path, str):
+        raise ScenarioError(_brief(name_or_path), '', 'expected a scenario name or path string')
     if name_or_path in list_scenarios():
         return SCENARIO_DIR / f'{name_or_path}.yaml'
-    path = pathlib.Path(name_or_path).expanduser()
-    if path.is_file():
+    try:
+        path = pathlib.Path(name_or_path).expanduser()
+        is_file = path.is_file()
+    except (OSError, ValueError, RuntimeError):  # unknown ~user, NUL byte, name too long
+        is_file = False
+    if is_file:
         return path
     known = ', '.join(list_scenarios())
     raise ScenarioError(name_or_path, '', f'no such scenario or file (installed: {known})')
@@ -83,8 +98,10 @@ def load_scenario(name_or_path: str) -> Scenario:
     path = resolve_scenario(name_or_path)
     try:
         data = yaml.safe_load(path.read_text(encoding='utf-8'))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
+    except (OSError, ValueError, yaml.YAMLError) as err:  # ValueError: not UTF-8, bad date
         raise ScenarioError(str(path), '', f'cannot read YAML: {err}') from None
+    except RecursionError:
+        raise ScenarioError(str(path), '', 'cannot read YAML: nested too deeply') from None
     return parse_scenario(data, source=str(path))
 
 
@@ -117,6 +134,8 @@ def parse_scenario(data: Any, source: str = '') -> Scenario:
     if not isinstance(data['objects'], list) or not data['objects']:
         fail('objects', 'must be a non-empty list')
     objects = [_parse_object(o, f'objects[{i}]', fail) for i, o in enumerate(data['objects'])]
+    description = data.get('description')
+    description = '' if description is None else description  # `description:` left empty
     table = ObjectSpec(
         id=TABLE_ID,
         role='static',
@@ -130,7 +149,7 @@ def parse_scenario(data: Any, source: str = '') -> Scenario:
         drop_zone_center=(zone_xy[0], zone_xy[1], zone_size[2] / 2),
         drop_zone_size=tuple(zone_size),
         home=tuple(home),
-        description=str(data.get('description', '')),
+        description=_text(description, 'description', fail),
         source=source,
         robot_keepout_radius=keepout,
     )
@@ -206,12 +225,8 @@ def _parse_object(data: Any, field: str, fail: Callable[..., Any]) -> ObjectSpec
     object_id = _string(data['id'], f'{field}.id', fail)
     if object_id == TABLE_ID:
         fail(f'{field}.id', f'{TABLE_ID!r} is reserved for the table')
-    role = data['role']
-    if role not in ('target', 'obstacle', 'static'):
-        fail(f'{field}.role', f'must be target, obstacle or static, got {role!r}')
-    shape = data['shape']
-    if shape not in _SHAPE_KEYS:
-        fail(f'{field}.shape', f'must be cylinder or box, got {shape!r}')
+    role = _choice(data['role'], _ROLES, f'{field}.role', fail)
+    shape = _choice(data['shape'], tuple(_SHAPE_KEYS), f'{field}.shape', fail)
     wrong = sorted((_SHAPE_KEYS['box'] | _SHAPE_KEYS['cylinder']) - _SHAPE_KEYS[shape] & set(data))
     if wrong:
         fail(f'{field}.{wrong[0]}', f'not allowed for a {shape}')
@@ -241,7 +256,8 @@ def _check_keys(
 ) -> None:
     for key in data:
         if key not in allowed:
-            fail(f'{prefix}{key}', f'unknown key (allowed: {", ".join(sorted(allowed))})')
+            problem = f'unknown key {_brief(key)} (allowed: {", ".join(sorted(allowed))})'
+            fail(_key_field(prefix, key), problem)
     for key in sorted(required - set(data)):
         fail(f'{prefix}{key}', 'missing')
 
@@ -253,27 +269,63 @@ def _get(section: Any, key: str, name: str, allowed: set, fail: Callable[..., An
     return section[key]
 
 
+def _key_field(prefix: str, key: Any) -> str:
+    """Field of ``key`` under ``prefix``: ``objects[0].mass``, or quoted: ``objects[0]['']``."""
+    if isinstance(key, str) and key.isidentifier():
+        return f'{prefix}{key}'
+    return f'{prefix.removesuffix(".")}[{_brief(key)}]'
+
+
+def _brief(value: Any) -> str:
+    """``repr(value)``, cut to :data:`_MAX_SHOWN` characters (a bad value may be huge)."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**_MAX_SHOWN:
+        return f'an integer of {value.bit_length()} bits'  # str() fails beyond 4300 digits
+    try:
+        text = _REPR.repr(value)  # depth and length limited: fast on huge or deep values
+    except (ValueError, RecursionError):  # e.g. an int of > 4300 digits inside a list
+        return f'a {type(value).__name__}'
+    return text if len(text) <= _MAX_SHOWN else f'{text[: _MAX_SHOWN - 3]}...'
+
+
 def _number(value: Any, field: str, fail: Callable[..., Any], positive: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        fail(field, f'must be a number, got {value!r}')
-    if not math.isfinite(value):
-        fail(field, f'must be finite, got {value}')
-    if positive and value <= 0:
-        fail(field, f'must be > 0, got {value}')
-    return float(value)
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        fail(field, f'expected a number, got {type(value).__name__} {_brief(value)}')
+    try:
+        number = float(value)
+    except (OverflowError, TypeError, ValueError):
+        fail(field, f'{_brief(value)} is too large for a float')
+    if not math.isfinite(number):
+        fail(field, f'must be finite, got {number}')
+    if positive and number <= 0:
+        fail(field, f'must be > 0, got {number}')
+    return number
 
 
 def _vector(
     value: Any, n: int, field: str, fail: Callable[..., Any], positive: bool = False
 ) -> list[float]:
-    if not isinstance(value, (list, tuple)) or len(value) != n:
-        fail(field, f'must be a list of {n} numbers, got {value!r}')
+    if not isinstance(value, (list, tuple)):
+        fail(field, f'must be a list of {n} numbers, got {type(value).__name__} {_brief(value)}')
+    if len(value) != n:
+        fail(field, f'must be a list of {n} numbers, got {len(value)} items')
     return [_number(v, f'{field}[{k}]', fail, positive) for k, v in enumerate(value)]
 
 
+def _text(value: Any, field: str, fail: Callable[..., Any]) -> str:
+    if not isinstance(value, str):
+        fail(field, f'expected a string, got {type(value).__name__} {_brief(value)}')
+    return value
+
+
 def _string(value: Any, field: str, fail: Callable[..., Any]) -> str:
-    if not isinstance(value, str) or not value.strip():
-        fail(field, f'must be a non-empty string, got {value!r}')
+    if not _text(value, field, fail).strip():
+        fail(field, f'must be a non-empty string, got {_brief(value)}')
+    return value
+
+
+def _choice(value: Any, choices: tuple[str, ...], field: str, fail: Callable[..., Any]) -> str:
+    if _text(value, field, fail) not in choices:
+        fail(field, f'must be one of {", ".join(choices)}, got {_brief(value)}')
     return value
 
 

@@ -2,18 +2,34 @@
 
 Thin ROS wrapper around :class:`~jaco2_sim.integrator.JointIntegrator` and
 :class:`~jaco2_sim.world.World`; see DESIGN.md for the graph contract.
+
+Limits and failure behaviour:
+
+* ``/joint_trajectory``: at most ``max_trajectory_points`` points (default 10 000, range 1 to
+  100 000). The sim runs on one executor thread, so a message blocks /joint_states while it is
+  handled: 10 000 points take about 0.08 s (0.07 s of it rclpy deserialisation), 100 000 about
+  0.9 s and 35 MB. The subscription is raw: the point count is read from the CDR bytes first, and
+  a longer trajectory is rejected (warning naming the limit) without being deserialised; the arm
+  keeps its current motion. Any other bad trajectory is rejected with a warning too.
+* ``~/reset_scene`` and the ``scenario`` parameter: a bad scenario gives ``success=false`` /
+  ``successful=false`` with the :class:`~jaco2_sim.exceptions.ScenarioError` text (file, field,
+  problem); the current scene is kept. Any unexpected exception while loading is answered the
+  same way and logged as an error: the node never dies from a request.
 """
 
 from __future__ import annotations
 
 import sys
+from typing import Any
 
 import numpy as np
 import rclpy
+import rclpy.serialization
 from qtree_msgs.msg import Scene
 from qtree_msgs.srv import AttachObject, ResetScene
 from rcl_interfaces.msg import (
     FloatingPointRange,
+    IntegerRange,
     ParameterDescriptor,
     SetParametersResult,
 )
@@ -26,10 +42,16 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from trajectory_msgs.msg import JointTrajectory
 
-from jaco2_sim.conversions import STATUS_NAMES, joint_state_msg, scene_msg, trajectory_arrays
+from jaco2_sim.conversions import (
+    STATUS_NAMES,
+    joint_state_msg,
+    scene_msg,
+    trajectory_arrays,
+    trajectory_size,
+)
 from jaco2_sim.exceptions import Jaco2SimError
 from jaco2_sim.integrator import JointIntegrator
-from jaco2_sim.model import FINGER_JOINTS, Jaco2Model, urdf_text
+from jaco2_sim.model import ARM_JOINTS, FINGER_JOINTS, Jaco2Model, urdf_text
 from jaco2_sim.scenario import load_scenario
 from jaco2_sim.world import World
 
@@ -42,13 +64,17 @@ LATCHED_QOS = QoSProfile(  # /scene and /robot_description
 STATE_QOS = QoSProfile(depth=10)  # /joint_states: reliable, volatile
 TRAJECTORY_QOS = QoSProfile(depth=10)  # /joint_trajectory
 ATTACH_DISTANCE_WARN = 0.25  # attach farther than this from the EE origin is suspicious [m]
+MAX_TRAJECTORY_POINTS_CAP = 100_000  # upper bound of max_trajectory_points (~0.9 s blocked)
 
 
 def _descriptor(
     text: str, lo: float | None = None, hi: float | None = None, **kw
 ) -> ParameterDescriptor:
-    ranges = [FloatingPointRange(from_value=lo, to_value=hi)] if lo is not None else []
-    return ParameterDescriptor(description=text, floating_point_range=ranges, **kw)
+    if isinstance(lo, int) and isinstance(hi, int):
+        kw['integer_range'] = [IntegerRange(from_value=lo, to_value=hi, step=1)]
+    elif lo is not None:
+        kw['floating_point_range'] = [FloatingPointRange(from_value=lo, to_value=hi)]
+    return ParameterDescriptor(description=text, **kw)
 
 
 # (name, default, (description, min, max)); robot_description (read-only URDF) is added on top.
@@ -58,14 +84,24 @@ PARAMETERS = [
     ('scene_rate_hz', 10.0, ('max /scene rate while an object moves [Hz]', 0.1, 100.0)),
     ('finger_angle_rad', 0.2, ('proximal finger joint angle [rad]', 0.0, 1.51)),
     ('initial_configuration', Parameter.Type.DOUBLE_ARRAY, ('7 arm angles [rad]; unset = home',)),
+    (
+        'max_trajectory_points',
+        10_000,
+        ('longer /joint_trajectory messages are rejected unread', 1, MAX_TRAJECTORY_POINTS_CAP),
+    ),
 ]
 
 
 class Jaco2SimNode(Node):
     """Publishes /joint_states each period, /scene on change, /robot_description once."""
 
-    def __init__(self) -> None:
-        super().__init__('jaco2_sim')
+    def __init__(self, **node_options: Any) -> None:
+        """Declare the parameters, load the scenario, start publishing.
+
+        Args:
+            node_options: passed to :class:`rclpy.node.Node` (e.g. ``context=`` in tests).
+        """
+        super().__init__('jaco2_sim', **node_options)
         params = [(n, v, _descriptor(*d)) for n, v, d in PARAMETERS]
         params.append(('robot_description', urdf_text(), _descriptor('URDF', read_only=True)))
         self.declare_parameters('', params)
@@ -87,7 +123,7 @@ class Jaco2SimNode(Node):
         self.scene_pub = self.create_publisher(Scene, '/scene', LATCHED_QOS)
         self.urdf_pub = self.create_publisher(String, '/robot_description', LATCHED_QOS)
         self.create_subscription(
-            JointTrajectory, '/joint_trajectory', self._on_trajectory, TRAJECTORY_QOS
+            JointTrajectory, '/joint_trajectory', self._on_raw_trajectory, TRAJECTORY_QOS, raw=True
         )
         self.create_service(ResetScene, '~/reset_scene', self._on_reset)
         self.create_service(AttachObject, '~/attach_object', self._on_attach)
@@ -117,6 +153,10 @@ class Jaco2SimNode(Node):
                     )
             except (Jaco2SimError, TypeError, ValueError) as err:
                 return SetParametersResult(successful=False, reason=f'{p.name}: {err}')
+            except Exception as err:  # a bad value must not kill the node
+                reason = f'{p.name}: unexpected {type(err).__name__}: {err}'
+                self.get_logger().error(f'parameter rejected: {reason}')
+                return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, params: list[Parameter]) -> None:
@@ -124,8 +164,8 @@ class Jaco2SimNode(Node):
             if p.name == 'scenario':
                 try:
                     self._load(p.value)
-                except Jaco2SimError as err:
-                    self.get_logger().error(f'scenario not loaded: {err}')
+                except Exception as err:  # checked before, so never expected
+                    self.get_logger().error(f'scenario not loaded: {type(err).__name__}: {err}')
             elif p.name == 'sim_rate_hz':
                 self.timer.cancel()
                 self.destroy_timer(self.timer)
@@ -133,9 +173,11 @@ class Jaco2SimNode(Node):
                 self.timer = self.create_timer(self.sim.period, self._on_timer)
 
     def _load(self, name: str) -> None:
+        """Load scenario ``name`` and teleport home; on any exception nothing has changed."""
         scenario = load_scenario(name)
-        self.scenario, self.world = scenario, World(scenario)
+        world = World(scenario)
         self.sim.reset(np.asarray(scenario.home))
+        self.scenario, self.world = scenario, world
         self._publish_scene()
 
     def _on_timer(self) -> None:
@@ -159,7 +201,38 @@ class Jaco2SimNode(Node):
         self._scene_version = self.world.version
         self._last_scene_time = now.nanoseconds * 1e-9
 
+    def _on_raw_trajectory(self, raw: bytes) -> None:
+        """Reject an oversized trajectory from its CDR lengths, else deserialise and follow it."""
+        size = trajectory_size(raw)
+        if size is not None:
+            names, points = size
+            if points is None:
+                self._reject_trajectory(f'{names} joint names, the arm has {len(ARM_JOINTS)}')
+                return
+            if self._too_long(points):
+                return
+        try:
+            msg = rclpy.serialization.deserialize_message(raw, JointTrajectory)
+        except Exception as err:  # garbage bytes must not kill the node
+            self._reject_trajectory(f'cannot deserialise: {err}')
+            return
+        self._on_trajectory(msg)
+
+    def _too_long(self, points: int) -> bool:
+        limit = self._param('max_trajectory_points')
+        if points > limit:
+            self._reject_trajectory(
+                f'{points} points, more than max_trajectory_points = {limit}'
+                ' (split it or raise the parameter)'
+            )
+        return points > limit
+
+    def _reject_trajectory(self, why: str) -> None:
+        self.get_logger().warning(f'trajectory rejected: {why}')
+
     def _on_trajectory(self, msg: JointTrajectory) -> None:
+        if self._too_long(len(msg.points)):
+            return
         if not msg.points:
             self.sim.cancel()
             self.get_logger().info('empty trajectory: stopping')
@@ -167,7 +240,7 @@ class Jaco2SimNode(Node):
         try:
             clamped = self.sim.set_reference(*trajectory_arrays(msg))
         except Jaco2SimError as err:
-            self.get_logger().warning(f'trajectory rejected: {err}')
+            self._reject_trajectory(str(err))
             return
         if clamped:
             self.get_logger().warning('trajectory beyond the joint limits: clamped to them')
@@ -180,6 +253,11 @@ class Jaco2SimNode(Node):
         except Jaco2SimError as err:
             response.success, response.message = False, str(err)
             self.get_logger().warning(f'reset_scene failed: {err}')
+            return response
+        except Exception as err:  # a bad file must not kill the node
+            response.success = False
+            response.message = f'{name}: unexpected {type(err).__name__}: {err}'
+            self.get_logger().error(f'reset_scene failed: {response.message}')
             return response
         response.success, response.message = True, f'scenario {self.scenario.name} loaded'
         return response

@@ -175,3 +175,75 @@ def test_generator_seed_changes_scene_and_bad_arguments() -> None:
         generate_clutter(5, 0.9, 0)
     with pytest.raises(ScenarioError, match='n_objects'):
         generate_clutter(-1, 0.2, 0)
+
+
+BAD_VALUES = [  # (mutation, field, problem): every type, not only the expected one, is named
+    (lambda d: d['objects'][0].update(shape=['cylinder']), 'objects[0].shape',
+     'expected a string, got list'),
+    (lambda d: d['objects'][0].update(shape={'cylinder': 1}), 'objects[0].shape',
+     'expected a string, got dict'),
+    (lambda d: d['objects'][1].update(role=['obstacle']), 'objects[1].role',
+     'expected a string, got list'),
+    (lambda d: d['objects'][1].update(role=None), 'objects[1].role',
+     'expected a string, got NoneType'),
+    (lambda d: d['objects'][1].update(id=7), 'objects[1].id', 'expected a string, got int'),
+    (lambda d: d.update(name={'a': 1}), 'name', 'expected a string, got dict'),
+    (lambda d: d.update(description=['x']), 'description', 'expected a string, got list'),
+    (lambda d: d['objects'][0].update(radius=10**400), 'objects[0].radius',
+     'too large for a float'),
+    (lambda d: d['objects'][2].update(yaw=-(10**400)), 'objects[2].yaw', 'too large for a float'),
+    (lambda d: d.update(home=[10**400] + [0.0] * 6), 'home[0]', 'too large for a float'),
+    (lambda d: d['table'].update(size=[10**400, 1, 1]), 'table.size[0]', 'too large for a float'),
+    (lambda d: d.update(robot_keepout_radius=10**400), 'robot_keepout_radius',
+     'too large for a float'),
+    (lambda d: d['objects'][0].update(height=True), 'objects[0].height',
+     'expected a number, got bool'),
+    (lambda d: d['objects'][0].update(radius=[0.03]), 'objects[0].radius',
+     'expected a number, got list'),
+    (lambda d: d['objects'][1].update(xy={'x': 0.5}), 'objects[1].xy', 'must be a list of 2'),
+    (lambda d: d.update({'': 1}), "['']", "unknown key ''"),
+    (lambda d: d['objects'][0].update({'': 1}), "objects[0]['']", "unknown key ''"),
+    (lambda d: d['table'].update({3: 1}), 'table[3]', 'unknown key 3'),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(('mutate', 'field', 'problem'), BAD_VALUES)
+def test_malformed_value_of_any_type_is_named(mutate: Any, field: str, problem: str) -> None:
+    with pytest.raises(ScenarioError) as info:
+        parse_scenario(_bad(mutate), source='bad.yaml')
+    assert (info.value.source, info.value.field) == ('bad.yaml', field)
+    assert problem in info.value.problem, str(info.value)
+    assert len(str(info.value)) < 300
+
+
+def test_huge_values_give_short_messages() -> None:
+    for value in ('x' * 100_000, list(range(100_000)), [10**5000], 10**4000):
+        with pytest.raises(ScenarioError, match=r'objects\[0\].shape') as info:
+            parse_scenario(_bad(lambda d, v=value: d['objects'][0].update(shape=v)))
+        assert len(str(info.value)) < 200
+
+
+@pytest.mark.parametrize(
+    ('text', 'problem'),
+    [
+        ('objects:\n  - shape: [cylinder]\n', 'objects[0].shape'),  # via load_scenario's checks
+        ('[' * 50_000, 'nested too deeply'),
+        ('name: 2001-02-30\n', 'day is out of range'),
+    ],
+)
+def test_load_scenario_bad_files_name_the_file(tmp_path: Any, text: str, problem: str) -> None:
+    data = copy.deepcopy(GOOD)
+    path = tmp_path / 'bad.yaml'
+    if text.startswith('objects'):
+        data['objects'][0]['shape'] = ['cylinder']
+        text = yaml.safe_dump(data)
+    path.write_text(text)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(str(path))
+    assert str(info.value).startswith(f'{path}: ') and problem in str(info.value)
+
+
+@pytest.mark.parametrize('name', [7, None, '~no_such_user_qtree/s.yaml', 'a\x00b', 'x' * 5000])
+def test_resolve_bad_names(name: Any) -> None:
+    with pytest.raises(ScenarioError):
+        resolve_scenario(name)
