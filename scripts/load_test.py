@@ -23,6 +23,7 @@ import random
 import sys
 import time
 from pathlib import Path
+from queue import Empty
 from typing import Any
 
 from orchestration import allocate_domain_id, start_node, stop_all
@@ -78,7 +79,7 @@ def client_worker(index: int, domain_id: int, duration_s: float, ids: dict, out:
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     client = node.create_client(RelocateObject, '/relocate_object')
-    records: list[tuple[str, int, float, bool]] = []
+    records: list[tuple[str, int, float, bool, bool]] = []
     try:
         if not client.wait_for_service(timeout_sec=30.0):
             out.put({'index': index, 'error': 'service not available'})
@@ -93,28 +94,51 @@ def client_worker(index: int, domain_id: int, duration_s: float, ids: dict, out:
                 executor.spin_once(timeout_sec=0.05)
             latency = time.perf_counter() - start
             if not future.done():
-                records.append((kind, -1, latency, False))
+                records.append((kind, -1, latency, False, False))
                 continue
             response = future.result()
             allowed = PLANNING_CODES if kind == 'valid' else INVALID_CASES[kind]
-            records.append((kind, int(response.reason), latency, response.reason in allowed))
+            ok = response.reason in allowed and response.feasible == (response.reason == 0)
+            records.append((kind, int(response.reason), latency, ok, bool(response.from_cache)))
         out.put({'index': index, 'records': records})
+    except Exception as err:  # report, never hang the parent on queue.get
+        out.put({'index': index, 'error': f'{type(err).__name__}: {err}', 'records': records})
     finally:
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown(context=context)
 
 
-def percentile(values: list[float], q: float) -> float:
-    """The q-th percentile (0..100) of ``values`` by nearest rank; NaN when empty."""
+def rss_mb(pid: int) -> float:
+    """Resident memory [MB] of ``pid`` and its descendants (``/proc/<pid>/status`` VmRSS)."""
+    total_kb, stack = 0, [pid]
+    while stack:
+        current = stack.pop()
+        try:
+            status = Path(f'/proc/{current}/status').read_text()
+            children = Path(f'/proc/{current}/task/{current}/children').read_text().split()
+        except OSError:
+            continue
+        rss = [line.split()[1] for line in status.splitlines() if line.startswith('VmRSS:')]
+        total_kb += int(rss[0]) if rss else 0
+        stack += [int(child) for child in children]
+    return round(total_kb / 1024, 1)
+
+
+def _ms(value: float | None) -> str:
+    return '    n/a' if value is None else f'{value:7.1f} ms'
+
+
+def percentile(values: list[float], q: float) -> float | None:
+    """The q-th percentile (0..100) of ``values`` by nearest rank; None when empty."""
     if not values:
-        return float('nan')
+        return None
     ordered = sorted(values)
     rank = min(len(ordered) - 1, max(0, round(q / 100 * (len(ordered) - 1))))
     return ordered[rank]
 
 
-def summarise(records: list[tuple[str, int, float, bool]], duration_s: float) -> dict[str, Any]:
+def summarise(records: list[tuple], duration_s: float) -> dict[str, Any]:
     """Latency percentiles [ms] and counts per request kind."""
     summary: dict[str, Any] = {'requests': len(records), 'duration_s': duration_s}
     summary['throughput_per_s'] = len(records) / duration_s
@@ -126,11 +150,13 @@ def summarise(records: list[tuple[str, int, float, bool]], duration_s: float) ->
             'p50_ms': percentile(latencies, 50),
             'p95_ms': percentile(latencies, 95),
             'p99_ms': percentile(latencies, 99),
-            'max_ms': max(latencies, default=float('nan')),
+            'max_ms': max(latencies, default=None),
             'codes': sorted({r[1] for r in records if r[0] == kind}),
+            'from_cache': sum(r[4] for r in records if r[0] == kind),
         }
     all_latencies = [r[2] * 1000 for r in records]
-    summary['all'] = {q: percentile(all_latencies, q) for q in (50, 95, 99)}
+    summary['all'] = {f'p{q}_ms': percentile(all_latencies, q) for q in (50, 95, 99)}
+    summary['all']['max_ms'] = max(all_latencies, default=None)
     return summary
 
 
@@ -163,49 +189,64 @@ def main(argv: list[str] | None = None) -> int:
         ),
         start_node('stpik_motion_planner', 'motion_planner_node', env=env, log_dir=logs),
     ]
+    results: list[dict[str, Any]] = []
+    alive: dict[str, bool] = {}
+    rss: dict[str, dict[str, float]] = {}
     try:
         for node in nodes:
             node.wait_for_log('ready', 60.0)
+        nodes[1].wait_for_log('planner rebuilt', 30.0)  # the planner has the scene
+        rss['before'] = {node.name: rss_mb(node.process.pid) for node in nodes}
         print(f'{args.clients} clients x {args.duration:.0f} s on domain {domain_id} ...')
-        queue: Any = mp.get_context('spawn').Queue()
+        context = mp.get_context('spawn')
+        queue: Any = context.Queue()
         workers = [
-            mp.get_context('spawn').Process(
-                target=client_worker, args=(i, domain_id, args.duration, ids, queue)
-            )
+            context.Process(target=client_worker, args=(i, domain_id, args.duration, ids, queue))
             for i in range(args.clients)
         ]
         os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
         for worker in workers:
             worker.start()
-        results = [queue.get(timeout=args.duration + 120) for _ in workers]
+        deadline = time.monotonic() + args.duration + 120.0
+        for _ in workers:
+            try:
+                results.append(queue.get(timeout=max(1.0, deadline - time.monotonic())))
+            except Empty:
+                results.append({'error': 'a client process sent no results'})
         for worker in workers:
             worker.join(timeout=10)
+            if worker.is_alive():
+                worker.kill()
         alive = {node.name: node.alive() for node in nodes}
+        rss['after'] = {node.name: rss_mb(node.process.pid) for node in nodes}
     finally:
         exit_codes = stop_all(nodes)
     errors = [r['error'] for r in results if 'error' in r]
-    records = [rec for r in results for rec in r.get('records', [])]
+    records = [tuple(rec) for r in results for rec in r.get('records', [])]
     summary = summarise(records, args.duration)
     summary.update(
         clients=args.clients,
+        scenario=args.scenario,
         nodes_alive_at_end=alive,
         node_exit_codes=exit_codes,
+        rss_mb=rss,
         client_errors=errors,
     )
     args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(json.dumps(summary, indent=2))
+    args.output.write_text(json.dumps(summary, indent=2) + '\n')
     print(f'requests: {summary["requests"]}  ({summary["throughput_per_s"]:.1f}/s)')
     for kind in ['valid', *sorted(INVALID_CASES)]:
         row = summary[kind]
-        print(
-            f'  {kind:22s} n={row["count"]:5d}  p50 {row["p50_ms"]:7.1f} ms  '
-            f'p95 {row["p95_ms"]:7.1f} ms  p99 {row["p99_ms"]:7.1f} ms  codes {row["codes"]}'
-        )
+        cells = '  '.join(f'{q} {_ms(row[q + "_ms"])}' for q in ('p50', 'p95', 'p99', 'max'))
+        print(f'  {kind:22s} n={row["count"]:5d}  {cells}  codes {row["codes"]}')
     print(
         f'unexpected answers: {len(summary["unexpected"])}; nodes alive: {alive}; '
-        f'client errors: {errors}; written to {args.output}'
+        f'exit codes: {exit_codes}; RSS [MB]: {rss}; client errors: {errors}; '
+        f'written to {args.output}'
     )
-    ok = not summary['unexpected'] and all(alive.values()) and not errors and records
+    clean_exit = all(code == 0 for code in exit_codes.values())
+    ok = not summary['unexpected'] and all(alive.values()) and clean_exit and not errors
+    ok = ok and bool(records)
     return 0 if ok else 1
 
 

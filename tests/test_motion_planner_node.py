@@ -85,3 +85,34 @@ def test_execute_relocates_the_object_in_the_sim(graph):
     target = next(o for o in state['scene'].objects if o.id == 'T')
     # Released in the drop zone (centre (0, 0.5), 0.3 m wide).
     assert abs(target.pose.position.x) < 0.2 and abs(target.pose.position.y - 0.5) < 0.2
+
+
+def test_bad_requests_do_not_wait_for_planning(graph):
+    node, client, _, planner = graph
+    planning = [('O1', []), ('O2', []), ('O3', []), ('O4', []), ('O5', [])]
+    planning.append(('T', ['O1', 'O2', 'O3', 'O4', 'O5']))
+    futures = [
+        client.call_async(RelocateObject.Request(object_id=o, relocated_ids=r))
+        for o, r in planning
+    ]
+    bad = client.call_async(RelocateObject.Request(object_id='ghost'))
+    assert node.spin_until(bad.done, 10.0)
+    pending = sum(not f.done() for f in futures)
+    assert node.spin_until(lambda: all(f.done() for f in futures), 60.0)
+    assert bad.result().reason == Reason.UNKNOWN_OBJECT
+    assert pending > 0, 'the bad request was answered only after every planning request'
+    assert all(f.result().reason != Reason.TIMEOUT for f in futures)
+    assert planner.alive()
+
+
+def test_huge_request_is_answered_logged_and_published_short(graph):
+    node, client, state, planner = graph
+    mark = len(planner.log_text())
+    answer = _call(node, client, 'T', ['O1'] * 10_000)
+    assert (answer.feasible, answer.reason) == (False, Reason.INVALID_REQUEST)
+    assert 'at most 256' in answer.message and len(answer.message) < 200, answer.message
+    assert node.spin_until(lambda: state['events'], 5.0)
+    event = state['events'][-1]
+    assert len(event.relocated_ids) == 256 and event.message == answer.message
+    assert node.spin_until(lambda: '(10000 ids)' in planner.log_text()[mark:], 5.0)
+    assert len(planner.log_text()[mark:]) < 1000

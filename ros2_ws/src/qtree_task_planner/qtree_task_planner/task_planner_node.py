@@ -61,11 +61,18 @@ _TIMEOUTS = {  # name: (default [s], description)
 }
 
 
-def _wait(future: rclpy.task.Future, timeout_s: float) -> bool:
-    """Block this thread until ``future`` is done (another executor thread completes it)."""
+def _wait(future: rclpy.task.Future, timeout_s: float, stop: threading.Event) -> bool:
+    """Block this thread until ``future`` is done (another executor thread completes it).
+
+    Returns False on time-out, or at once when ``stop`` is set (the node is shutting down).
+    """
     done = threading.Event()
     future.add_done_callback(lambda _: done.set())
-    return done.wait(timeout_s) or future.done()
+    deadline = time.monotonic() + timeout_s
+    while not done.wait(0.1):
+        if stop.is_set() or time.monotonic() > deadline:
+            return future.done()
+    return True
 
 
 class RosPlannerOracle:
@@ -79,10 +86,17 @@ class RosPlannerOracle:
         planner_runs: answers not served from the motion planner's cache (``from_cache``).
     """
 
-    def __init__(self, client: rclpy.client.Client, timeout_s: float, scene_wait_s: float) -> None:
+    def __init__(
+        self,
+        client: rclpy.client.Client,
+        timeout_s: float,
+        scene_wait_s: float,
+        stop: threading.Event | None = None,
+    ) -> None:
         self.client = client
         self.timeout_s = timeout_s
         self.scene_wait_s = scene_wait_s
+        self.stop = stop or threading.Event()
         self.planner_runs = 0
 
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
@@ -97,9 +111,13 @@ class RosPlannerOracle:
         deadline = time.monotonic() + self.scene_wait_s
         while True:
             future = self.client.call_async(request)
-            if not _wait(future, self.timeout_s) or future.result() is None:
+            if not _wait(future, self.timeout_s, self.stop) or future.result() is None:
                 future.cancel()
-                detail = f'no answer in {self.timeout_s} s'
+                detail = (
+                    'node shutting down'
+                    if self.stop.is_set()
+                    else f'no answer in {self.timeout_s} s'
+                )
                 raise OracleUnavailableError(object_id, relocated, detail)
             response = future.result()
             if response.reason != RelocateObject.Response.NO_SCENE:
@@ -127,6 +145,8 @@ class TaskPlannerNode(Node):
         self._group = ReentrantCallbackGroup()
         self._scene: Scene | None = None
         self._busy = threading.Lock()
+        self.stopping = threading.Event()  # set on shutdown: a running training ends at once
+        self.context.on_shutdown(self.stopping.set)
         self.create_subscription(Scene, '/scene', self._on_scene, LATCHED_QOS)
         self._stats_pub = self.create_publisher(TrainingStats, '/training_stats', STATS_QOS)
         self._tree_pub = self.create_publisher(QTreeMsg, '/qtree', LATCHED_QOS)
@@ -176,12 +196,17 @@ class TaskPlannerNode(Node):
             self._busy.release()
         self.get_logger().info(f'goal finished: {message}')
         msg = result_msg(result, error_code=code, message=message, executed=executed)
-        if code == Result.SUCCESS:
-            goal_handle.succeed()
-        elif code == Result.CANCELED:
-            goal_handle.canceled()
-        else:
-            goal_handle.abort()
+        try:
+            if code == Result.SUCCESS:
+                goal_handle.succeed()
+            elif code == Result.CANCELED and goal_handle.is_cancel_requested:
+                goal_handle.canceled()
+            else:  # failures, and a training ended by the node shutting down
+                goal_handle.abort()
+        except Exception as err:  # the context is gone when the node shuts down mid-goal
+            if not self.stopping.is_set():
+                raise
+            self.get_logger().info(f'goal ended by shutdown: {err}')
         return msg
 
     def _run(self, goal_handle) -> tuple:
@@ -201,7 +226,10 @@ class TaskPlannerNode(Node):
             msg = 'service /relocate_object not available'
             return Result.MOTION_PLANNER_UNAVAILABLE, msg, None, False
         oracle = RosPlannerOracle(
-            self._planner, self._param('planner_timeout_s'), self._param('scene_wait_s')
+            self._planner,
+            self._param('planner_timeout_s'),
+            self._param('scene_wait_s'),
+            self.stopping,
         )
         trainer = QTreeTrainer(movable, target, oracle, settings.config)
         every = settings.feedback_every
@@ -212,7 +240,7 @@ class TaskPlannerNode(Node):
             if stats.episode % every == 0:
                 goal_handle.publish_feedback(feedback_msg(stats))
                 self._tree_pub.publish(tree_msg(trainer.tree, stats.episode, now))
-            return not goal_handle.is_cancel_requested
+            return not (goal_handle.is_cancel_requested or self.stopping.is_set())
 
         try:
             result = trainer.run(on_episode)
@@ -246,7 +274,7 @@ class TaskPlannerNode(Node):
                 object_id=object_id, relocated_ids=list(sequence[:i]), execute=True
             )
             future = self._planner.call_async(request)
-            if not _wait(future, timeout_s) or future.result() is None:
+            if not _wait(future, timeout_s, self.stopping) or future.result() is None:
                 return f'executing {object_id!r}: no answer in {timeout_s} s'
             if not future.result().feasible:
                 return f'executing {object_id!r} failed: {future.result().message}'
@@ -271,6 +299,7 @@ def main(args: list[str] | None = None) -> None:
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        node.stopping.set()  # end a running training so its executor thread can finish
         node.destroy_node()
         rclpy.try_shutdown()
 

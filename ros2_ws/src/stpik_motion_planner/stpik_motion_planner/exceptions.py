@@ -6,6 +6,8 @@ turns any of them into a :class:`~stpik_motion_planner.result.PlanResult` in one
 
 from __future__ import annotations
 
+import time
+
 from stpik_motion_planner.result import Reason
 
 
@@ -97,11 +99,27 @@ class SceneCollision(MotionPlannerError):  # noqa: N818
 
 
 class PlanningTimeout(MotionPlannerError):  # noqa: N818
-    """The check ran past ``PlannerConfig.time_limit_s``."""
+    """The check ran past ``PlannerConfig.time_limit_s``.
+
+    Attributes:
+        elapsed_s: planning time when the limit was noticed [s] (from the start of the check).
+        limit_s: the time limit [s].
+    """
 
     reason = Reason.TIMEOUT
 
     def __init__(self, elapsed_s: float, limit_s: float) -> None:
+        """Args: ``elapsed_s`` since the check started [s], not the overrun; ``limit_s`` [s]."""
         self.elapsed_s = elapsed_s
         self.limit_s = limit_s
         super().__init__(f'planning took {elapsed_s:.3f} s > time limit {limit_s:.3f} s')
+
+    @classmethod
+    def past(cls, deadline: float, limit_s: float) -> PlanningTimeout:
+        """The timeout noticed now for a check whose ``deadline`` is start + ``limit_s``.
+
+        Args:
+            deadline: ``time.perf_counter()`` value at which the check had to end [s].
+            limit_s: the time limit [s].
+        """
+        return cls(time.perf_counter() - (deadline - limit_s), limit_s)

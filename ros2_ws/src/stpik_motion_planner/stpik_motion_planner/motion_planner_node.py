@@ -3,11 +3,30 @@
 Converts messages and calls :class:`~stpik_motion_planner.planner.MotionPlanner`; with
 ``execute=true`` it streams the trajectory to ``jaco2_sim`` segment by segment and attaches and
 releases the object through ``/jaco2_sim/attach_object``.
+
+Limits and timing of a request:
+
+- At most ``MAX_RELOCATED_IDS`` (256) relocated ids and ``MAX_ID_CHARS`` (256) characters per id
+  (:mod:`.scene_checks`); an id not in the scene is ``UNKNOWN_OBJECT`` whatever its length.
+  Answers, log lines and ``/motion_planner/events`` quote at most 5 ids, each cut to 40
+  characters; the event carries at most 256 ids of at most 256 characters.
+- Bad requests, ``NO_SCENE`` and cache hits are answered at once, without waiting for the
+  planner. Checks that need planning run one at a time (one STPIK state per planner); a request
+  waits at most ``request_timeout_s`` for its turn, then ``TIMEOUT``. ``time_limit_s`` bounds
+  the planning itself, so an answer takes at most about ``request_timeout_s + time_limit_s``.
+  At most ``MAX_WAITING_PLANS`` requests wait or plan at once; more get ``TIMEOUT`` (busy) at
+  once, so the executor (``EXECUTOR_THREADS`` threads) always has threads for /joint_states,
+  /scene and the other requests.
+- One execution at a time (another gets ``EXECUTION_FAILED``); /scene messages received
+  meanwhile (the carried object moves) rebuild the planner once, after the execution. If no
+  /joint_states arrives for ``joint_state_timeout_s`` during execution, it stops with
+  ``EXECUTION_FAILED`` ("the simulator stopped publishing /joint_states").
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import threading
 import time
 
@@ -22,7 +41,7 @@ from rcl_interfaces.msg import (
     ParameterDescriptor,
     SetParametersResult,
 )
-from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -34,6 +53,12 @@ from stpik_motion_planner.conversions import pose_array_msg, scenario_from_msg, 
 from stpik_motion_planner.exceptions import MotionPlannerError
 from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import PlanResult, Reason
+from stpik_motion_planner.scene_checks import (
+    MAX_ID_CHARS,
+    MAX_RELOCATED_IDS,
+    format_id,
+    format_ids,
+)
 
 SCENE_QOS = QoSProfile(
     depth=1,
@@ -45,7 +70,23 @@ STATE_QOS = QoSProfile(depth=10)
 EXTRA = {
     'execution_timeout_s': (30.0, 0.1, 600.0, 'time for the sim to follow a segment [s]'),
     'goal_tolerance_rad': (0.02, 1e-4, 0.5, 'joint error at which a segment is reached [rad]'),
+    'joint_state_timeout_s': (
+        1.0,
+        0.05,
+        60.0,
+        'longest /joint_states silence during execution before EXECUTION_FAILED [s]',
+    ),
+    'request_timeout_s': (
+        10.0,
+        0.0,
+        600.0,
+        'longest wait of a request for the busy planner before TIMEOUT; the planning itself '
+        'is bounded by time_limit_s [s]',
+    ),
 }
+MAX_WAITING_PLANS = 8  # requests waiting for or holding the planner at once [-]
+EXECUTOR_THREADS = MAX_WAITING_PLANS + 4  # + execution, /joint_states, /scene, quick answers
+MAX_MESSAGE_CHARS = 1000  # longest answer message, log line or event message [characters]
 
 
 class MotionPlannerNode(Node):
@@ -69,24 +110,41 @@ class MotionPlannerNode(Node):
                 name, value, ParameterDescriptor(description=text, floating_point_range=[rng])
             )
         self.add_on_set_parameters_callback(self._on_parameters)
-        self._lock = threading.Lock()
+        self._lock = threading.Lock()  # swaps of the planner (held for an assignment only)
+        self._plan_lock = threading.Lock()  # held while planning: one STPIK state per planner
+        self._waiting = threading.BoundedSemaphore(MAX_WAITING_PLANS)
+        self._scene_lock = threading.Lock()  # one /scene handled at a time
+        self._executing = False  # under self._lock
+        self._deferred_scene: Scene | None = None  # under self._lock
         self._planner: MotionPlanner | None = None
         self._scene_error = ''
         self._geometry: tuple | None = None
         self._original: dict[str, tuple[float, float, float]] = {}
         self._q: np.ndarray | None = None
-        group = ReentrantCallbackGroup()
-        self.create_subscription(Scene, '/scene', self._on_scene, SCENE_QOS, callback_group=group)
+        self._state_time = -math.inf  # time.monotonic() of the last /joint_states [s]
+        # Own groups, so that waiting requests never hold back the state, scene or attach answer.
         self.create_subscription(
-            JointState, '/joint_states', self._on_joint_states, STATE_QOS, callback_group=group
+            Scene,
+            '/scene',
+            self._on_scene,
+            SCENE_QOS,
+            callback_group=MutuallyExclusiveCallbackGroup(),
         )
+        # /joint_states only while executing: at 100 Hz its executor wake-ups alone kept one core
+        # busy (rclpy's Python executor), which slowed planning 10-50x under load.
+        self._state_group = MutuallyExclusiveCallbackGroup()
         self._trajectory_pub = self.create_publisher(JointTrajectory, '/joint_trajectory', 10)
         self._event_pub = self.create_publisher(PlanningEvent, '/motion_planner/events', 10)
         self._attach = self.create_client(
-            AttachObject, '/jaco2_sim/attach_object', callback_group=group
+            AttachObject,
+            '/jaco2_sim/attach_object',
+            callback_group=MutuallyExclusiveCallbackGroup(),
         )
         self.create_service(
-            RelocateObject, '/relocate_object', self._on_relocate, callback_group=group
+            RelocateObject,
+            '/relocate_object',
+            self._on_relocate,
+            callback_group=ReentrantCallbackGroup(),
         )
         self.get_logger().info('motion_planner ready: serving /relocate_object')
 
@@ -112,8 +170,17 @@ class MotionPlannerNode(Node):
         index = {n: i for i, n in enumerate(msg.name)}
         if all(n in index for n in ARM_JOINTS):
             self._q = np.array([msg.position[index[n]] for n in ARM_JOINTS])
+            self._state_time = time.monotonic()
 
     def _on_scene(self, msg: Scene) -> None:
+        with self._lock:
+            if self._executing:  # the sim moves the carried object: rebuild once released
+                self._deferred_scene = msg
+                return
+        with self._scene_lock:
+            self._rebuild(msg)
+
+    def _rebuild(self, msg: Scene) -> None:
         for o in msg.objects:
             if o.status == ObjectState.STATUS_IN_CLUTTER or o.id not in self._original:
                 p = o.pose.position
@@ -134,40 +201,109 @@ class MotionPlannerNode(Node):
         self.get_logger().info(f'scene {msg.scenario_name!r}: planner rebuilt')
 
     def _on_relocate(self, request, response):
-        with self._lock:
-            planner = self._planner
-            if planner is None:
-                reason = Reason.INVALID_SCENE if self._scene_error else Reason.NO_SCENE
-                result = PlanResult(False, reason, self._scene_error or 'no /scene received yet')
-            else:
-                result = planner.check(request.object_id, list(request.relocated_ids))
+        received = time.monotonic()
+        relocated = list(request.relocated_ids)
+        result = self._answer(request.object_id, relocated, received)
         if result.feasible and request.execute:
             result = self._execute(result, request.object_id)
+        message = _clip(result.message, MAX_MESSAGE_CHARS)
         response.feasible, response.reason = result.feasible, int(result.reason)
-        response.message, response.planning_time = result.message, result.planning_time
+        response.message, response.planning_time = message, result.planning_time
         response.from_cache = result.from_cache
         response.trajectory = trajectory_msg(result.times, result.joint_trajectory)
         response.ee_path = pose_array_msg(result.ee_path, 'j2s7s300_link_base')
         event = PlanningEvent(
             stamp=self.get_clock().now().to_msg(),
-            object_id=request.object_id,
-            relocated_ids=list(request.relocated_ids),
+            object_id=_clip(request.object_id, MAX_ID_CHARS),
+            relocated_ids=[_clip(r, MAX_ID_CHARS) for r in relocated[:MAX_RELOCATED_IDS]],
             execute=request.execute,
             feasible=result.feasible,
             reason=int(result.reason),
-            message=result.message,
+            message=message,
             planning_time=result.planning_time,
             from_cache=result.from_cache,
             ee_path=response.ee_path,
         )
         self._event_pub.publish(event)
-        self.get_logger().info(
-            f'relocate {request.object_id} after {list(request.relocated_ids)}'
-            f': {result.reason.name} ({result.planning_time * 1e3:.1f} ms)'
+        line = (
+            f'relocate {format_id(request.object_id)} after {format_ids(relocated)}'
+            f': {result.reason.name} ({result.planning_time * 1e3:.1f} ms planning, '
+            f'{(time.monotonic() - received) * 1e3:.1f} ms in all)'
         )
+        self.get_logger().info(_clip(line, MAX_MESSAGE_CHARS))
         return response
 
+    def _answer(self, object_id: str, relocated: list[str], received: float) -> PlanResult:
+        """Validate and answer from the cache at once; plan (waiting for the planner) if needed."""
+        planner = self._planner
+        if planner is None:
+            return self._no_planner()
+        answer = planner.precheck(object_id, relocated)
+        if answer is not None:
+            return answer
+        wait_s = self.get_parameter('request_timeout_s').value
+        if not self._waiting.acquire(blocking=False):
+            return PlanResult(
+                False,
+                Reason.TIMEOUT,
+                f'planner busy: {MAX_WAITING_PLANS} requests are already waiting for it',
+            )
+        try:
+            remaining_s = max(0.0, received + wait_s - time.monotonic())
+            if not self._plan_lock.acquire(timeout=remaining_s):
+                return PlanResult(
+                    False,
+                    Reason.TIMEOUT,
+                    f'planner busy: not free within request_timeout_s={wait_s:.1f} s',
+                )
+            try:
+                planner = self._planner  # the scene may have changed while waiting
+                if planner is None:
+                    return self._no_planner()
+                return planner.check(object_id, relocated)  # may now be in the cache
+            finally:
+                self._plan_lock.release()
+        finally:
+            self._waiting.release()
+
+    def _no_planner(self) -> PlanResult:
+        reason = Reason.INVALID_SCENE if self._scene_error else Reason.NO_SCENE
+        return PlanResult(False, reason, self._scene_error or 'no /scene received yet')
+
     def _execute(self, result: PlanResult, object_id: str) -> PlanResult:
+        with self._lock:
+            busy, self._executing = self._executing, True
+        if busy:
+            return dataclasses.replace(
+                result,
+                feasible=False,
+                reason=Reason.EXECUTION_FAILED,
+                message='another relocation is being executed',
+            )
+        try:
+            return self._follow(result, object_id)
+        finally:
+            with self._lock:
+                self._executing = False
+                deferred, self._deferred_scene = self._deferred_scene, None
+            if deferred is not None:
+                self._on_scene(deferred)
+
+    def _follow(self, result: PlanResult, object_id: str) -> PlanResult:
+        self._q, self._state_time = None, -math.inf
+        states = self.create_subscription(
+            JointState,
+            '/joint_states',
+            self._on_joint_states,
+            STATE_QOS,
+            callback_group=self._state_group,
+        )
+        try:
+            return self._follow_segments(result, object_id)
+        finally:
+            self.destroy_subscription(states)
+
+    def _follow_segments(self, result: PlanResult, object_id: str) -> PlanResult:
         g, r = result.grasp_index, result.release_index
         steps = [(0, g, True), (g, r, False), (r, len(result.times) - 1, None)]
         for start, end, attach in steps:
@@ -175,31 +311,42 @@ class MotionPlannerNode(Node):
             self._trajectory_pub.publish(
                 trajectory_msg(times, result.joint_trajectory[start : end + 1])
             )
-            if not self._reach(result.joint_trajectory[end], times[-1]):
+            failure = self._reach(result.joint_trajectory[end], times[-1])
+            if failure:
                 return dataclasses.replace(
                     result,
                     feasible=False,
                     reason=Reason.EXECUTION_FAILED,
-                    message=f'the sim did not reach sample {end}',
+                    message=f'the sim did not reach sample {end}: {failure}',
                 )
             if attach is not None and not self._call_attach(object_id, attach):
                 return dataclasses.replace(
                     result,
                     feasible=False,
                     reason=Reason.EXECUTION_FAILED,
-                    message=f'attach_object({object_id}, {attach}) failed',
+                    message=f'attach_object({format_id(object_id)}, {attach}) failed',
                 )
         return result
 
-    def _reach(self, q_goal: np.ndarray, duration: float) -> bool:
+    def _reach(self, q_goal: np.ndarray, duration: float) -> str:
+        """Wait until the arm is at ``q_goal``: '' when reached, else why not."""
         timeout = self.get_parameter('execution_timeout_s').value + duration
+        silence_s = self.get_parameter('joint_state_timeout_s').value
         tolerance = self.get_parameter('goal_tolerance_rad').value
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+        start = time.monotonic()
+        while True:
+            now = time.monotonic()
             if self._q is not None and np.max(np.abs(self._q - q_goal)) < tolerance:
-                return True
+                return ''
+            silent = now - max(self._state_time, start)
+            if silent > silence_s:
+                return (
+                    f'the simulator stopped publishing /joint_states (none for {silent:.1f} s, '
+                    f'joint_state_timeout_s={silence_s:.1f})'
+                )
+            if now - start > timeout:
+                return f'not within {timeout:.1f} s (execution_timeout_s + segment duration)'
             time.sleep(0.02)
-        return False
 
     def _call_attach(self, object_id: str, attach: bool) -> bool:
         if not self._attach.wait_for_service(timeout_sec=5.0):
@@ -214,11 +361,16 @@ class MotionPlannerNode(Node):
         return future.done() and future.result() is not None and future.result().success
 
 
+def _clip(text: str, limit: int) -> str:
+    """``text`` cut to ``limit`` characters (ending in '…' when cut)."""
+    return text if len(text) <= limit else text[: limit - 1] + '…'
+
+
 def main(args: list[str] | None = None) -> None:
     """Run the node until Ctrl-C."""
     rclpy.init(args=args)
     node = MotionPlannerNode()
-    executor = MultiThreadedExecutor(num_threads=4)
+    executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
     executor.add_node(node)
     try:
         executor.spin()

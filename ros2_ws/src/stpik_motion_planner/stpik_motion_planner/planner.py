@@ -85,6 +85,20 @@ class MotionPlanner:
         Bad requests give ``feasible=False`` with a 1xx reason; never raises.
         """
         relocated = list(relocated_ids)
+        answer = self.precheck(object_id, relocated)
+        if answer is not None:
+            return answer
+        result = self.plan(object_id, relocated)
+        if result.reason != Reason.TIMEOUT:  # a timeout may pass on a quieter machine
+            self.cache.put(object_id, relocated, result)
+        return result
+
+    def precheck(self, object_id: str, relocated: list[str]) -> PlanResult | None:
+        """The answer that needs no planning (a bad request or a cache hit), else None.
+
+        Cheap (O(len(relocated)), no STPIK state touched), so a server may call it concurrently
+        with a running :meth:`plan` and answer bad requests without waiting for the planner.
+        """
         try:
             validate_request(self.scenario, object_id, relocated)
         except InvalidRequest as err:
@@ -92,10 +106,7 @@ class MotionPlanner:
         cached = self.cache.get(object_id, relocated)
         if cached is not None:
             return dataclasses.replace(cached, from_cache=True)
-        result = self.plan(object_id, relocated)
-        if result.reason != Reason.TIMEOUT:  # a timeout may pass on a quieter machine
-            self.cache.put(object_id, relocated, result)
-        return result
+        return None
 
     def slot_position(self, index: int, obj: ObjectSpec) -> np.ndarray:
         """Centre [m] (3,) of ``obj`` standing in drop-zone slot ``index`` (grid, wraps)."""

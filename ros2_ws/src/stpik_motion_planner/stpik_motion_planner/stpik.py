@@ -210,7 +210,9 @@ class Stpik:
         k = self.kinematics(q, scene)
         for index, (target, strict) in enumerate(zip(samples, tight, strict=True)):
             if time.perf_counter() > deadline:
-                raise PlanningTimeout(time.perf_counter() - deadline, c.time_limit_s)
+                raise PlanningTimeout(
+                    time.perf_counter() - deadline + c.time_limit_s, c.time_limit_s
+                )
             factor = 1.0 if strict else LOOSE_FACTOR
             self.ee.target = target
             active: list[str] = []
@@ -253,7 +255,9 @@ class Stpik:
         active: list[str] = []
         for _ in range(iterations):
             if time.perf_counter() > deadline:
-                raise PlanningTimeout(time.perf_counter() - deadline, c.time_limit_s)
+                raise PlanningTimeout(
+                    time.perf_counter() - deadline + c.time_limit_s, c.time_limit_s
+                )
             if _within(
                 pose_error(target, k.world_ee),
                 c.position_tolerance_m / 2,
@@ -288,7 +292,9 @@ class Stpik:
         out = np.array([q_a + (q_b - q_a) * t for t in np.arange(1, n + 1) / n])
         for q in out:
             if time.perf_counter() > deadline:
-                raise PlanningTimeout(time.perf_counter() - deadline, c.time_limit_s)
+                raise PlanningTimeout(
+                    time.perf_counter() - deadline + c.time_limit_s, c.time_limit_s
+                )
             k = self.kinematics(q, scene)
             for p in k.self_pairs:
                 if p.distance <= c.self_min_distance_m:
