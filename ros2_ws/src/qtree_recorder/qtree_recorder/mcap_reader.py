@@ -15,6 +15,7 @@ Typical use::
 
 from __future__ import annotations
 
+import contextlib
 import io
 import logging
 import re
@@ -343,13 +344,37 @@ def _make_channel(
     if schema is None or schema.encoding != 'ros2msg' or record.message_encoding != 'cdr':
         return None
     try:
-        decoder = factory.decoder_for(record.message_encoding, schema)
+        with contextlib.redirect_stdout(io.StringIO()):  # mcap_ros2 prints parse errors
+            decoder = factory.decoder_for(record.message_encoding, _msg_style(schema))
     except Exception:  # a definition the parser rejects: unknown schema
         return None
     if decoder is None:
         return None
     qos = record.metadata.get('offered_qos_profiles', '')
     return _Channel(record.topic, schema.name, qos, schema.data.decode(errors='replace'), decoder)
+
+
+# Generated action/service types (``pkg/action/X_FeedbackMessage``) are valid in rosbag2 logs, but
+# mcap_ros2's parser only accepts ``pkg/Name`` with Name matching ``[A-Z][A-Za-z0-9]*``.
+_GENERATED_TYPE = re.compile(r'\b([a-z][a-z0-9_]*)/(?:action|srv)/([A-Z][A-Za-z0-9_]*)')
+
+
+def _msg_style(schema: Schema) -> Schema:
+    """The schema with generated action/service type names rewritten for mcap_ros2's parser.
+
+    ``qtree_msgs/action/RetrieveTarget_Feedback`` becomes ``qtree_msgs/RetrieveTargetFeedback``
+    in the schema name, the field types and the ``MSG:`` headers alike; the CDR layout is
+    unchanged, so the decoded messages are the same.
+    """
+    if not _GENERATED_TYPE.search(schema.name + schema.data.decode(errors='replace')):
+        return schema
+
+    def rename(match: re.Match[str]) -> str:
+        return f'{match.group(1)}/{match.group(2).replace("_", "")}'
+
+    data = _GENERATED_TYPE.sub(rename, schema.data.decode(errors='replace')).encode()
+    return Schema(id=schema.id, name=_GENERATED_TYPE.sub(rename, schema.name),
+                  encoding=schema.encoding, data=data)  # fmt: skip
 
 
 _ROBOT_NAME = re.compile(r'<robot\b[^>]*\bname\s*=\s*["\']([^"\']+)["\']')
