@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from load_test import rss_mb  # one RSS reader for the load script and these tests
 from orchestration import NodeProcess, allocate_domain_id, start_node, stop_all
 
 pytestmark = pytest.mark.timeout(300)
@@ -26,22 +27,6 @@ pytestmark = pytest.mark.timeout(300)
 RSS_GROWTH_MB = 150.0  # largest acceptable RSS growth of a node for one huge input [MB]
 MESSAGE_CHARS = 2000  # longest acceptable answer message [characters]
 MAX_STATE_GAP_S = 0.5  # longest acceptable /joint_states silence of the sim (25 periods) [s]
-
-
-def rss_mb(pid: int) -> float:
-    """Resident memory [MB] of ``pid`` and its descendants (``ros2 run`` wraps the node)."""
-    total_kb, stack = 0, [pid]
-    while stack:
-        current = stack.pop()
-        try:
-            status = Path(f'/proc/{current}/status').read_text()
-            children = Path(f'/proc/{current}/task/{current}/children').read_text().split()
-        except OSError:
-            continue
-        total_kb += int(next(line for line in status.splitlines() if line.startswith('VmRSS'))
-                        .split()[1])  # fmt: skip
-        stack += [int(c) for c in children]
-    return total_kb / 1024
 
 
 class Limits:
