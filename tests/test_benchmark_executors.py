@@ -1,4 +1,5 @@
-"""scripts/benchmark.py gives the same trainings on a process pool and on a local Ray instance.
+"""scripts/benchmark.py gives the same trainings on a process pool, a local Ray instance and the
+ROS graph.
 
 Every training is seeded, so the executor must not change a single figure.
 """
@@ -32,3 +33,12 @@ def test_ray_and_process_pool_agree(tmp_path: Path) -> None:
     assert len(pool) == 6
     assert pool == ray
     assert all(len(r['sequence']) == 4 for r in pool), 'S1 optimum: 3 obstacles + target'
+
+
+def test_ros_graph_and_in_process_agree(tmp_path: Path) -> None:
+    """The same seeded trainings through sim + motion planner + task planner as processes."""
+    in_process = _run(tmp_path / 'in_process', '--workers', '1')
+    graph = _run(tmp_path / 'graph', '--ros')
+    assert graph == in_process
+    meta = json.loads((tmp_path / 'graph' / 'benchmark.json').read_text())['meta']
+    assert 'ROS graph' in meta['oracle']
