@@ -8,9 +8,11 @@ from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
+import rclpy.serialization
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Pose, Vector3
 from qtree_msgs.msg import ObjectState, Scene
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
@@ -46,6 +48,24 @@ def pose_msg(placement: pin.SE3) -> Pose:
         float(q.w),
     )
     return msg
+
+
+def parameter_descriptor(
+    text: str, lo: float | None = None, hi: float | None = None, **kw
+) -> ParameterDescriptor:
+    """Descriptor with ``text``, an integer range if both bounds are int, else a float one.
+
+    Args:
+        text: description, with the unit.
+        lo: lowest valid value (None: no range).
+        hi: highest valid value.
+        kw: other ParameterDescriptor fields (e.g. ``read_only=True``).
+    """
+    if isinstance(lo, int) and isinstance(hi, int):
+        kw['integer_range'] = [IntegerRange(from_value=lo, to_value=hi, step=1)]
+    elif lo is not None:
+        kw['floating_point_range'] = [FloatingPointRange(from_value=lo, to_value=hi)]
+    return ParameterDescriptor(description=text, **kw)
 
 
 def _vector3(values: Sequence[float]) -> Vector3:
@@ -149,3 +169,42 @@ def trajectory_size(raw: bytes) -> tuple[int, int | None] | None:
     except struct.error:
         return None
     return names, points
+
+
+def too_long_message(points: int, limit: int) -> str | None:
+    """Why a trajectory of ``points`` points exceeds ``limit`` (max_trajectory_points), or None."""
+    if points > limit:
+        return (
+            f'{points} points, more than max_trajectory_points = {limit}'
+            ' (split it or raise the parameter)'
+        )
+    return None
+
+
+def decode_trajectory(raw: bytes, max_points: int) -> JointTrajectory:
+    """Deserialise a raw /joint_trajectory message, rejecting an oversized one unread.
+
+    The lengths are read first (:func:`trajectory_size`): more than ``max_points`` points, or more
+    joint names than :data:`MAX_SCANNED_NAMES`, is rejected without deserialising.
+
+    Args:
+        raw: the message as a raw subscription receives it.
+        max_points: the ``max_trajectory_points`` parameter [-].
+
+    Raises:
+        TrajectoryError: why the trajectory is rejected (the node logs it).
+    """
+    size = trajectory_size(raw)
+    if size is not None:
+        names, points = size
+        if points is None:
+            raise TrajectoryError(f'{names} joint names, the arm has {len(ARM_JOINTS)}')
+        if why := too_long_message(points, max_points):
+            raise TrajectoryError(why)
+    try:
+        msg = rclpy.serialization.deserialize_message(raw, JointTrajectory)
+    except Exception as err:  # garbage bytes must not kill the node
+        raise TrajectoryError(f'cannot deserialise: {err}') from err
+    if why := too_long_message(len(msg.points), max_points):
+        raise TrajectoryError(why)
+    return msg

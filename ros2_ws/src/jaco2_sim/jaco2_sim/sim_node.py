@@ -24,15 +24,9 @@ from typing import Any
 
 import numpy as np
 import rclpy
-import rclpy.serialization
 from qtree_msgs.msg import Scene
 from qtree_msgs.srv import AttachObject, ResetScene
-from rcl_interfaces.msg import (
-    FloatingPointRange,
-    IntegerRange,
-    ParameterDescriptor,
-    SetParametersResult,
-)
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import InvalidParameterValueException, ParameterUninitializedException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
@@ -44,14 +38,15 @@ from trajectory_msgs.msg import JointTrajectory
 
 from jaco2_sim.conversions import (
     STATUS_NAMES,
+    decode_trajectory,
     joint_state_msg,
+    parameter_descriptor,
     scene_msg,
     trajectory_arrays,
-    trajectory_size,
 )
-from jaco2_sim.exceptions import Jaco2SimError
+from jaco2_sim.exceptions import Jaco2SimError, TrajectoryError
 from jaco2_sim.integrator import JointIntegrator
-from jaco2_sim.model import ARM_JOINTS, FINGER_JOINTS, Jaco2Model, urdf_text
+from jaco2_sim.model import FINGER_JOINTS, Jaco2Model, urdf_text
 from jaco2_sim.scenario import load_scenario
 from jaco2_sim.world import World
 
@@ -65,16 +60,6 @@ STATE_QOS = QoSProfile(depth=10)  # /joint_states: reliable, volatile
 TRAJECTORY_QOS = QoSProfile(depth=10)  # /joint_trajectory
 ATTACH_DISTANCE_WARN = 0.25  # attach farther than this from the EE origin is suspicious [m]
 MAX_TRAJECTORY_POINTS_CAP = 100_000  # upper bound of max_trajectory_points (~0.9 s blocked)
-
-
-def _descriptor(
-    text: str, lo: float | None = None, hi: float | None = None, **kw
-) -> ParameterDescriptor:
-    if isinstance(lo, int) and isinstance(hi, int):
-        kw['integer_range'] = [IntegerRange(from_value=lo, to_value=hi, step=1)]
-    elif lo is not None:
-        kw['floating_point_range'] = [FloatingPointRange(from_value=lo, to_value=hi)]
-    return ParameterDescriptor(description=text, **kw)
 
 
 # (name, default, (description, min, max)); robot_description (read-only URDF) is added on top.
@@ -102,8 +87,9 @@ class Jaco2SimNode(Node):
             node_options: passed to :class:`rclpy.node.Node` (e.g. ``context=`` in tests).
         """
         super().__init__('jaco2_sim', **node_options)
-        params = [(n, v, _descriptor(*d)) for n, v, d in PARAMETERS]
-        params.append(('robot_description', urdf_text(), _descriptor('URDF', read_only=True)))
+        params = [(n, v, parameter_descriptor(*d)) for n, v, d in PARAMETERS]
+        urdf = parameter_descriptor('URDF', read_only=True)
+        params.append(('robot_description', urdf_text(), urdf))
         self.declare_parameters('', params)
         self.robot = Jaco2Model(self._param('finger_angle_rad'))
         self.scenario = load_scenario(self._param('scenario'))
@@ -203,36 +189,17 @@ class Jaco2SimNode(Node):
 
     def _on_raw_trajectory(self, raw: bytes) -> None:
         """Reject an oversized trajectory from its CDR lengths, else deserialise and follow it."""
-        size = trajectory_size(raw)
-        if size is not None:
-            names, points = size
-            if points is None:
-                self._reject_trajectory(f'{names} joint names, the arm has {len(ARM_JOINTS)}')
-                return
-            if self._too_long(points):
-                return
         try:
-            msg = rclpy.serialization.deserialize_message(raw, JointTrajectory)
-        except Exception as err:  # garbage bytes must not kill the node
-            self._reject_trajectory(f'cannot deserialise: {err}')
+            msg = decode_trajectory(raw, self._param('max_trajectory_points'))
+        except TrajectoryError as err:
+            self._reject_trajectory(str(err))
             return
         self._on_trajectory(msg)
-
-    def _too_long(self, points: int) -> bool:
-        limit = self._param('max_trajectory_points')
-        if points > limit:
-            self._reject_trajectory(
-                f'{points} points, more than max_trajectory_points = {limit}'
-                ' (split it or raise the parameter)'
-            )
-        return points > limit
 
     def _reject_trajectory(self, why: str) -> None:
         self.get_logger().warning(f'trajectory rejected: {why}')
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
-        if self._too_long(len(msg.points)):
-            return
         if not msg.points:
             self.sim.cancel()
             self.get_logger().info('empty trajectory: stopping')

@@ -16,7 +16,6 @@ once per episode); an execution step failing -> EXECUTION_FAILED.
 from __future__ import annotations
 
 import threading
-import time
 
 import rclpy
 from qtree_msgs.action import RetrieveTarget
@@ -43,6 +42,7 @@ from qtree_task_planner.messages import (
     stats_msg,
     tree_msg,
 )
+from qtree_task_planner.ros_oracle import RosPlannerOracle, execute_sequence
 from qtree_task_planner.training import STOP_CANCELLED, QTreeTrainer
 
 LATCHED_QOS = QoSProfile(  # /scene and /qtree: late joiners get the last message
@@ -59,77 +59,6 @@ _TIMEOUTS = {  # name: (default [s], description)
     'execute_timeout_s': (180.0, 'timeout of one RelocateObject call with execute=true [s]'),
     'scene_wait_s': (10.0, 'wait for a /scene message at goal start [s]'),
 }
-
-
-def _wait(future: rclpy.task.Future, timeout_s: float, stop: threading.Event) -> bool:
-    """Block this thread until ``future`` is done (another executor thread completes it).
-
-    Returns False on time-out, or at once when ``stop`` is set (the node is shutting down).
-    """
-    done = threading.Event()
-    future.add_done_callback(lambda _: done.set())
-    deadline = time.monotonic() + timeout_s
-    while not done.wait(0.1):
-        if stop.is_set() or time.monotonic() > deadline:
-            return future.done()
-    return True
-
-
-class RosPlannerOracle:
-    """Feasibility oracle over the ``/relocate_object`` service (execute=false).
-
-    Planning failures (reason 2xx) and planner time-outs (3xx) are "cannot relocate" (-1 of
-    eq. 8). Request errors (1xx: unknown object, invalid request, no or invalid scene) are not
-    answers about feasibility: NO_SCENE is retried for ``scene_wait_s``, the others raise.
-
-    Attributes:
-        planner_runs: answers not served from the motion planner's cache (``from_cache``).
-    """
-
-    def __init__(
-        self,
-        client: rclpy.client.Client,
-        timeout_s: float,
-        scene_wait_s: float,
-        stop: threading.Event | None = None,
-    ) -> None:
-        self.client = client
-        self.timeout_s = timeout_s
-        self.scene_wait_s = scene_wait_s
-        self.stop = stop or threading.Event()
-        self.planner_runs = 0
-
-    def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
-        """Ask the motion planner.
-
-        Raises:
-            OracleUnavailableError: no answer in time, or the request was rejected.
-        """
-        request = RelocateObject.Request(
-            object_id=object_id, relocated_ids=list(relocated), execute=False
-        )
-        deadline = time.monotonic() + self.scene_wait_s
-        while True:
-            future = self.client.call_async(request)
-            if not _wait(future, self.timeout_s, self.stop) or future.result() is None:
-                future.cancel()
-                detail = (
-                    'node shutting down'
-                    if self.stop.is_set()
-                    else f'no answer in {self.timeout_s} s'
-                )
-                raise OracleUnavailableError(object_id, relocated, detail)
-            response = future.result()
-            if response.reason != RelocateObject.Response.NO_SCENE:
-                break
-            if time.monotonic() > deadline:
-                raise OracleUnavailableError(object_id, relocated, response.message)
-            time.sleep(0.2)  # the planner has not received /scene yet
-        if 100 <= response.reason < 200:
-            detail = f'request rejected (reason {response.reason}): {response.message}'
-            raise OracleUnavailableError(object_id, relocated, detail)
-        self.planner_runs += not response.from_cache
-        return bool(response.feasible)
 
 
 class TaskPlannerNode(Node):
@@ -261,24 +190,11 @@ class TaskPlannerNode(Node):
         )
         if not settings.execute:
             return Result.SUCCESS, summary, result, False
-        error = self._execute_sequence(result.sequence)
+        timeout_s = self._param('execute_timeout_s')
+        error = execute_sequence(self._planner, result.sequence, timeout_s, self.stopping)
         if error:
             return Result.EXECUTION_FAILED, error, result, False
         return Result.SUCCESS, summary + ', executed', result, True
-
-    def _execute_sequence(self, sequence: tuple[str, ...]) -> str:
-        """Relocate each object on the arm; returns an error message or ''."""
-        timeout_s = self._param('execute_timeout_s')
-        for i, object_id in enumerate(sequence):
-            request = RelocateObject.Request(
-                object_id=object_id, relocated_ids=list(sequence[:i]), execute=True
-            )
-            future = self._planner.call_async(request)
-            if not _wait(future, timeout_s, self.stopping) or future.result() is None:
-                return f'executing {object_id!r}: no answer in {timeout_s} s'
-            if not future.result().feasible:
-                return f'executing {object_id!r} failed: {future.result().message}'
-        return ''
 
     def _wait_for(self, predicate, timeout_s: float) -> bool:
         event = threading.Event()

@@ -3,7 +3,7 @@
 import pytest
 from qtree_msgs.srv import RelocateObject
 from qtree_task_planner.exceptions import OracleUnavailableError
-from qtree_task_planner.task_planner_node import RosPlannerOracle
+from qtree_task_planner.ros_oracle import RosPlannerOracle
 from rclpy.task import Future
 
 Response = RelocateObject.Response

@@ -1,16 +1,25 @@
-"""Message ↔ core conversions of the motion-planner node (ROS message types, no rclpy node)."""
+"""Message ↔ core conversions of the motion-planner node (ROS message types, no rclpy node).
+
+Also builds the /relocate_object answer, the ``/motion_planner/events`` message and the
+parameter descriptors the node declares.
+"""
 
 from __future__ import annotations
 
 import math
 
 import numpy as np
-from builtin_interfaces.msg import Duration
+from builtin_interfaces.msg import Duration, Time
 from geometry_msgs.msg import Pose, PoseArray
 from jaco2_sim.model import ARM_JOINTS, HOME
 from jaco2_sim.scene import ObjectSpec, Scenario
-from qtree_msgs.msg import ObjectState, Scene
+from qtree_msgs.msg import ObjectState, PlanningEvent, Scene
+from qtree_msgs.srv import RelocateObject
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from stpik_motion_planner.result import PlanResult
+from stpik_motion_planner.scene_checks import MAX_ID_CHARS, MAX_RELOCATED_IDS
 
 ROLES = {
     ObjectState.ROLE_TARGET: 'target',
@@ -18,6 +27,7 @@ ROLES = {
     ObjectState.ROLE_STATIC: 'static',
 }
 SHAPES = {ObjectState.SHAPE_CYLINDER: 'cylinder', ObjectState.SHAPE_BOX: 'box'}
+EE_FRAME = 'j2s7s300_link_base'  # frame of the answered end-effector path
 
 
 def _yaw(pose: Pose) -> float:
@@ -85,3 +95,79 @@ def pose_array_msg(path: np.ndarray, frame_id: str) -> PoseArray:
         o.x, o.y, o.z, o.w = (float(v) for v in row[3:])
         msg.poses.append(pose)
     return msg
+
+
+def clip(text: str, limit: int) -> str:
+    """``text`` cut to ``limit`` characters (ending in '…' when cut)."""
+    return text if len(text) <= limit else text[: limit - 1] + '…'
+
+
+def range_descriptor(
+    text: str, low: float, high: float, *, integer: bool = False
+) -> ParameterDescriptor:
+    """Descriptor of a parameter valid in [``low``, ``high``] (integer step 1 if ``integer``).
+
+    Args:
+        text: description, with the unit.
+        low: lowest valid value (inclusive).
+        high: highest valid value (inclusive).
+        integer: an integer parameter (else a float one).
+    """
+    if integer:
+        rng = IntegerRange(from_value=int(low), to_value=int(high), step=1)
+        return ParameterDescriptor(description=text, integer_range=[rng])
+    rng = FloatingPointRange(from_value=float(low), to_value=float(high))
+    return ParameterDescriptor(description=text, floating_point_range=[rng])
+
+
+def fill_relocate_response(
+    response: RelocateObject.Response, result: PlanResult, message: str
+) -> RelocateObject.Response:
+    """Copy ``result`` into ``response``, with ``message`` (already clipped) as its message.
+
+    Args:
+        response: the /relocate_object response to fill.
+        result: the answer (times [s], joint trajectory [rad], end-effector path [m]).
+        message: the answer's message, cut to the node's limit.
+
+    Returns:
+        ``response``, filled; its end-effector path is in the arm base frame.
+    """
+    response.feasible, response.reason = result.feasible, int(result.reason)
+    response.message, response.planning_time = message, result.planning_time
+    response.from_cache = result.from_cache
+    response.trajectory = trajectory_msg(result.times, result.joint_trajectory)
+    response.ee_path = pose_array_msg(result.ee_path, EE_FRAME)
+    return response
+
+
+def planning_event_msg(
+    stamp: Time,
+    request: RelocateObject.Request,
+    response: RelocateObject.Response,
+    result: PlanResult,
+) -> PlanningEvent:
+    """The ``/motion_planner/events`` message of one answered request.
+
+    Ids are cut to :data:`MAX_ID_CHARS` characters, at most :data:`MAX_RELOCATED_IDS` of them;
+    the message and end-effector path are those of ``response``.
+
+    Args:
+        stamp: time of the answer.
+        request: the /relocate_object request.
+        response: its answer, filled by :func:`fill_relocate_response`.
+        result: the answer as a :class:`PlanResult`.
+    """
+    relocated = list(request.relocated_ids)
+    return PlanningEvent(
+        stamp=stamp,
+        object_id=clip(request.object_id, MAX_ID_CHARS),
+        relocated_ids=[clip(r, MAX_ID_CHARS) for r in relocated[:MAX_RELOCATED_IDS]],
+        execute=request.execute,
+        feasible=result.feasible,
+        reason=int(result.reason),
+        message=response.message,
+        planning_time=result.planning_time,
+        from_cache=result.from_cache,
+        ee_path=response.ee_path,
+    )

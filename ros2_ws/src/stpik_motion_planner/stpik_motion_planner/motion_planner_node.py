@@ -1,8 +1,10 @@
 """``motion_planner`` node: serves /relocate_object with the STPIK motion planner (Figure 2).
 
-Converts messages and calls :class:`~stpik_motion_planner.planner.MotionPlanner`; with
-``execute=true`` it streams the trajectory to ``jaco2_sim`` segment by segment and attaches and
-releases the object through ``/jaco2_sim/attach_object``.
+Converts messages (:mod:`.conversions`) and calls
+:class:`~stpik_motion_planner.planner.MotionPlanner`; with ``execute=true``
+:class:`~stpik_motion_planner.execution.TrajectoryExecution` streams the trajectory to
+``jaco2_sim`` segment by segment and attaches and releases the object through
+``/jaco2_sim/attach_object``.
 
 Limits and timing of a request:
 
@@ -26,39 +28,31 @@ Limits and timing of a request:
 from __future__ import annotations
 
 import dataclasses
-import math
 import threading
 import time
 
-import numpy as np
 import rclpy
-from jaco2_sim.model import ARM_JOINTS
 from qtree_msgs.msg import ObjectState, PlanningEvent, Scene
-from qtree_msgs.srv import AttachObject, RelocateObject
-from rcl_interfaces.msg import (
-    FloatingPointRange,
-    IntegerRange,
-    ParameterDescriptor,
-    SetParametersResult,
-)
+from qtree_msgs.srv import RelocateObject
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import JointState
-from trajectory_msgs.msg import JointTrajectory
 
 from stpik_motion_planner.config import INTEGER_FIELDS, RANGES, PlannerConfig, check_value
-from stpik_motion_planner.conversions import pose_array_msg, scenario_from_msg, trajectory_msg
+from stpik_motion_planner.conversions import (
+    clip,
+    fill_relocate_response,
+    planning_event_msg,
+    range_descriptor,
+    scenario_from_msg,
+)
 from stpik_motion_planner.exceptions import MotionPlannerError
+from stpik_motion_planner.execution import TrajectoryExecution
 from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import PlanResult, Reason
-from stpik_motion_planner.scene_checks import (
-    MAX_ID_CHARS,
-    MAX_RELOCATED_IDS,
-    format_id,
-    format_ids,
-)
+from stpik_motion_planner.scene_checks import format_id, format_ids
 
 SCENE_QOS = QoSProfile(
     depth=1,
@@ -66,7 +60,6 @@ SCENE_QOS = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )
-STATE_QOS = QoSProfile(depth=10)
 EXTRA = {
     'execution_timeout_s': (30.0, 0.1, 600.0, 'time for the sim to follow a segment [s]'),
     'goal_tolerance_rad': (0.02, 1e-4, 0.5, 'joint error at which a segment is reached [rad]'),
@@ -96,19 +89,10 @@ class MotionPlannerNode(Node):
         super().__init__('motion_planner')
         defaults = PlannerConfig()
         for name, (low, high, text) in RANGES.items():
-            value = getattr(defaults, name)
-            if name in INTEGER_FIELDS:
-                rng = IntegerRange(from_value=int(low), to_value=int(high), step=1)
-                desc = ParameterDescriptor(description=text, integer_range=[rng])
-            else:
-                rng = FloatingPointRange(from_value=float(low), to_value=float(high))
-                desc = ParameterDescriptor(description=text, floating_point_range=[rng])
-            self.declare_parameter(name, value, desc)
+            desc = range_descriptor(text, low, high, integer=name in INTEGER_FIELDS)
+            self.declare_parameter(name, getattr(defaults, name), desc)
         for name, (value, low, high, text) in EXTRA.items():
-            rng = FloatingPointRange(from_value=low, to_value=high)
-            self.declare_parameter(
-                name, value, ParameterDescriptor(description=text, floating_point_range=[rng])
-            )
+            self.declare_parameter(name, value, range_descriptor(text, low, high))
         self.add_on_set_parameters_callback(self._on_parameters)
         self._lock = threading.Lock()  # swaps of the planner (held for an assignment only)
         self._plan_lock = threading.Lock()  # held while planning: one STPIK state per planner
@@ -120,8 +104,6 @@ class MotionPlannerNode(Node):
         self._scene_error = ''
         self._geometry: tuple | None = None
         self._original: dict[str, tuple[float, float, float]] = {}
-        self._q: np.ndarray | None = None
-        self._state_time = -math.inf  # time.monotonic() of the last /joint_states [s]
         # Own groups, so that waiting requests never hold back the state, scene or attach answer.
         self.create_subscription(
             Scene,
@@ -130,16 +112,8 @@ class MotionPlannerNode(Node):
             SCENE_QOS,
             callback_group=MutuallyExclusiveCallbackGroup(),
         )
-        # /joint_states only while executing: at 100 Hz its executor wake-ups alone kept one core
-        # busy (rclpy's Python executor), which slowed planning 10-50x under load.
-        self._state_group = MutuallyExclusiveCallbackGroup()
-        self._trajectory_pub = self.create_publisher(JointTrajectory, '/joint_trajectory', 10)
+        self._execution = TrajectoryExecution(self)  # /joint_trajectory, attach_object
         self._event_pub = self.create_publisher(PlanningEvent, '/motion_planner/events', 10)
-        self._attach = self.create_client(
-            AttachObject,
-            '/jaco2_sim/attach_object',
-            callback_group=MutuallyExclusiveCallbackGroup(),
-        )
         self.create_service(
             RelocateObject,
             '/relocate_object',
@@ -165,12 +139,6 @@ class MotionPlannerNode(Node):
             if self._planner is not None and changes:
                 self._planner = MotionPlanner(self._planner.scenario, config)
         return SetParametersResult(successful=True)
-
-    def _on_joint_states(self, msg: JointState) -> None:
-        index = {n: i for i, n in enumerate(msg.name)}
-        if all(n in index for n in ARM_JOINTS):
-            self._q = np.array([msg.position[index[n]] for n in ARM_JOINTS])
-            self._state_time = time.monotonic()
 
     def _on_scene(self, msg: Scene) -> None:
         with self._lock:
@@ -206,31 +174,15 @@ class MotionPlannerNode(Node):
         result = self._answer(request.object_id, relocated, received)
         if result.feasible and request.execute:
             result = self._execute(result, request.object_id)
-        message = _clip(result.message, MAX_MESSAGE_CHARS)
-        response.feasible, response.reason = result.feasible, int(result.reason)
-        response.message, response.planning_time = message, result.planning_time
-        response.from_cache = result.from_cache
-        response.trajectory = trajectory_msg(result.times, result.joint_trajectory)
-        response.ee_path = pose_array_msg(result.ee_path, 'j2s7s300_link_base')
-        event = PlanningEvent(
-            stamp=self.get_clock().now().to_msg(),
-            object_id=_clip(request.object_id, MAX_ID_CHARS),
-            relocated_ids=[_clip(r, MAX_ID_CHARS) for r in relocated[:MAX_RELOCATED_IDS]],
-            execute=request.execute,
-            feasible=result.feasible,
-            reason=int(result.reason),
-            message=message,
-            planning_time=result.planning_time,
-            from_cache=result.from_cache,
-            ee_path=response.ee_path,
-        )
-        self._event_pub.publish(event)
+        fill_relocate_response(response, result, clip(result.message, MAX_MESSAGE_CHARS))
+        stamp = self.get_clock().now().to_msg()
+        self._event_pub.publish(planning_event_msg(stamp, request, response, result))
         line = (
             f'relocate {format_id(request.object_id)} after {format_ids(relocated)}'
             f': {result.reason.name} ({result.planning_time * 1e3:.1f} ms planning, '
             f'{(time.monotonic() - received) * 1e3:.1f} ms in all)'
         )
-        self.get_logger().info(_clip(line, MAX_MESSAGE_CHARS))
+        self.get_logger().info(clip(line, MAX_MESSAGE_CHARS))
         return response
 
     def _answer(self, object_id: str, relocated: list[str], received: float) -> PlanResult:
@@ -281,89 +233,13 @@ class MotionPlannerNode(Node):
                 message='another relocation is being executed',
             )
         try:
-            return self._follow(result, object_id)
+            return self._execution.follow(result, object_id)
         finally:
             with self._lock:
                 self._executing = False
                 deferred, self._deferred_scene = self._deferred_scene, None
             if deferred is not None:
                 self._on_scene(deferred)
-
-    def _follow(self, result: PlanResult, object_id: str) -> PlanResult:
-        self._q, self._state_time = None, -math.inf
-        states = self.create_subscription(
-            JointState,
-            '/joint_states',
-            self._on_joint_states,
-            STATE_QOS,
-            callback_group=self._state_group,
-        )
-        try:
-            return self._follow_segments(result, object_id)
-        finally:
-            self.destroy_subscription(states)
-
-    def _follow_segments(self, result: PlanResult, object_id: str) -> PlanResult:
-        g, r = result.grasp_index, result.release_index
-        steps = [(0, g, True), (g, r, False), (r, len(result.times) - 1, None)]
-        for start, end, attach in steps:
-            times = result.times[start : end + 1] - result.times[start]
-            self._trajectory_pub.publish(
-                trajectory_msg(times, result.joint_trajectory[start : end + 1])
-            )
-            failure = self._reach(result.joint_trajectory[end], times[-1])
-            if failure:
-                return dataclasses.replace(
-                    result,
-                    feasible=False,
-                    reason=Reason.EXECUTION_FAILED,
-                    message=f'the sim did not reach sample {end}: {failure}',
-                )
-            if attach is not None and not self._call_attach(object_id, attach):
-                return dataclasses.replace(
-                    result,
-                    feasible=False,
-                    reason=Reason.EXECUTION_FAILED,
-                    message=f'attach_object({format_id(object_id)}, {attach}) failed',
-                )
-        return result
-
-    def _reach(self, q_goal: np.ndarray, duration: float) -> str:
-        """Wait until the arm is at ``q_goal``: '' when reached, else why not."""
-        timeout = self.get_parameter('execution_timeout_s').value + duration
-        silence_s = self.get_parameter('joint_state_timeout_s').value
-        tolerance = self.get_parameter('goal_tolerance_rad').value
-        start = time.monotonic()
-        while True:
-            now = time.monotonic()
-            if self._q is not None and np.max(np.abs(self._q - q_goal)) < tolerance:
-                return ''
-            silent = now - max(self._state_time, start)
-            if silent > silence_s:
-                return (
-                    f'the simulator stopped publishing /joint_states (none for {silent:.1f} s, '
-                    f'joint_state_timeout_s={silence_s:.1f})'
-                )
-            if now - start > timeout:
-                return f'not within {timeout:.1f} s (execution_timeout_s + segment duration)'
-            time.sleep(0.02)
-
-    def _call_attach(self, object_id: str, attach: bool) -> bool:
-        if not self._attach.wait_for_service(timeout_sec=5.0):
-            return False
-        request = AttachObject.Request(
-            object_id=object_id, attach=attach, status_after_release=ObjectState.STATUS_RELOCATED
-        )
-        future = self._attach.call_async(request)
-        deadline = time.monotonic() + 10.0
-        while not future.done() and time.monotonic() < deadline:
-            time.sleep(0.01)
-        return future.done() and future.result() is not None and future.result().success
-
-
-def _clip(text: str, limit: int) -> str:
-    """``text`` cut to ``limit`` characters (ending in '…' when cut)."""
-    return text if len(text) <= limit else text[: limit - 1] + '…'
 
 
 def main(args: list[str] | None = None) -> None:
