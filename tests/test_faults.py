@@ -29,7 +29,7 @@ pytestmark = pytest.mark.timeout(300)
 READY_S = 90.0
 PLANNER_TIMEOUT_S = 5.0  # task planner: wait for one RelocateObject answer [s]
 EXECUTION_TIMEOUT_S = 5.0  # motion planner: extra wait for the sim to reach a segment end [s]
-JOINT_STATE_TIMEOUT_S = 1.0  # motion planner default: /joint_states silence failing execution [s]
+JOINT_STATE_TIMEOUT_S = 3.0  # motion planner default: /joint_states silence failing execution [s]
 
 
 def test_motion_planner_killed_mid_training(launch: Any, ros_node: Any, tmp_path: Path) -> None:

@@ -63,8 +63,8 @@ SCENE_QOS = QoSProfile(
 EXTRA = {
     'execution_timeout_s': (30.0, 0.1, 600.0, 'time for the sim to follow a segment [s]'),
     'goal_tolerance_rad': (0.02, 1e-4, 0.5, 'joint error at which a segment is reached [rad]'),
-    'joint_state_timeout_s': (
-        1.0,
+    'joint_state_timeout_s': (  # 3 s: a loaded 2-core demo once saw a 1.1 s callback gap
+        3.0,
         0.05,
         60.0,
         'longest /joint_states silence during execution before EXECUTION_FAILED [s]',
