@@ -210,9 +210,7 @@ class Stpik:
         k = self.kinematics(q, scene)
         for index, (target, strict) in enumerate(zip(samples, tight, strict=True)):
             if time.perf_counter() > deadline:
-                raise PlanningTimeout(
-                    time.perf_counter() - deadline + c.time_limit_s, c.time_limit_s
-                )
+                raise PlanningTimeout.past(deadline, c.time_limit_s)
             factor = 1.0 if strict else LOOSE_FACTOR
             self.ee.target = target
             active: list[str] = []
@@ -222,12 +220,7 @@ class Stpik:
                     error, c.position_tolerance_m * factor, c.orientation_tolerance_rad * factor
                 ):
                     break
-                dq, active = self.solve(k)
-                largest = float(np.max(np.abs(dq)))
-                if largest > c.max_joint_step_rad:
-                    dq *= c.max_joint_step_rad / largest
-                q = q + dq
-                k = self.kinematics(q, scene)
+                q, k, active = self._step(q, k, scene)
             self._check(k, index, target, factor, active)
             out[index] = q
         return out
@@ -255,23 +248,31 @@ class Stpik:
         active: list[str] = []
         for _ in range(iterations):
             if time.perf_counter() > deadline:
-                raise PlanningTimeout(
-                    time.perf_counter() - deadline + c.time_limit_s, c.time_limit_s
-                )
+                raise PlanningTimeout.past(deadline, c.time_limit_s)
             if _within(
                 pose_error(target, k.world_ee),
                 c.position_tolerance_m / 2,
                 c.orientation_tolerance_rad / 2,
             ):
                 break
-            dq, active = self.solve(k)
-            largest = float(np.max(np.abs(dq)))
-            if largest > c.max_joint_step_rad:
-                dq *= c.max_joint_step_rad / largest
-            q = q + dq
-            k = self.kinematics(q, scene)
+            q, k, active = self._step(q, k, scene)
         self._check(k, -1, target, 1.0, active)
         return q
+
+    def _step(
+        self, q: np.ndarray, k: Kinematics, scene: SceneWorld
+    ) -> tuple[np.ndarray, Kinematics, list[str]]:
+        """One eq. (6) step from ``q`` [rad], clamped to ``max_joint_step_rad`` on every joint.
+
+        Returns:
+            The new joint angles [rad] (7,), their kinematics, the names of the active tasks.
+        """
+        dq, active = self.solve(k)
+        largest = float(np.max(np.abs(dq)))
+        if largest > self.config.max_joint_step_rad:
+            dq *= self.config.max_joint_step_rad / largest
+        q = q + dq
+        return q, self.kinematics(q, scene), active
 
     def transit(
         self, q_a: np.ndarray, q_b: np.ndarray, scene: SceneWorld, deadline: float = np.inf
@@ -292,9 +293,7 @@ class Stpik:
         out = np.array([q_a + (q_b - q_a) * t for t in np.arange(1, n + 1) / n])
         for q in out:
             if time.perf_counter() > deadline:
-                raise PlanningTimeout(
-                    time.perf_counter() - deadline + c.time_limit_s, c.time_limit_s
-                )
+                raise PlanningTimeout.past(deadline, c.time_limit_s)
             k = self.kinematics(q, scene)
             for p in k.self_pairs:
                 if p.distance <= c.self_min_distance_m:
