@@ -26,11 +26,12 @@ import fcl
 import numpy as np
 import pink
 import pinocchio as pin
-from jaco2_sim.model import EE_FRAME, Jaco2Model
-from jaco2_sim.scenario import generate_clutter, load_scenario
-from jaco2_sim.scene import Scenario
+from jaco2_description.model import EE_FRAME, Jaco2Model
 from pink.limits import ConfigurationLimit, VelocityLimit
 from pink.tasks import FrameTask, PostureTask
+from qtree_scene.generator import generate_clutter
+from qtree_scene.scenario import load_scenario
+from qtree_scene.scene import Scenario
 from qtree_task_planner.exact import solve_exact
 from qtree_task_planner.exceptions import SearchLimitExceededError
 from qtree_task_planner.oracle import MotionPlannerOracle

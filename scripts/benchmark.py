@@ -92,7 +92,7 @@ def scenario_ids(name: str, kind: str) -> tuple[tuple[str, ...], str]:
         from qtree_task_planner.synthetic import synthetic_scenario
 
         return tuple(synthetic_scenario(name)[0]), 'T'
-    from jaco2_sim.scenario import load_scenario
+    from qtree_scene.scenario import load_scenario
 
     scenario = load_scenario(name)
     return tuple(o.id for o in scenario.obstacles), scenario.target.id

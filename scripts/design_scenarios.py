@@ -23,13 +23,13 @@ import sys
 import time
 from pathlib import Path
 
-from jaco2_sim.scenario import dump_scenario, load_scenario
-from jaco2_sim.scene import ObjectSpec, Scenario
+from qtree_scene.scenario import dump_scenario, load_scenario
+from qtree_scene.scene import ObjectSpec, Scenario
 from qtree_task_planner.exact import count_feasible_sequences, solve_exact
 from qtree_task_planner.oracle import MotionPlannerOracle
 
 SCENARIO_DIR = (
-    Path(__file__).resolve().parents[1] / 'ros2_ws/src/jaco2_sim/jaco2_sim/resources/scenarios'
+    Path(__file__).resolve().parents[1] / 'ros2_ws/src/qtree_scene/qtree_scene/scenarios'
 )
 RADIUS = 0.03  # cylinder radius [m]
 

@@ -176,7 +176,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.clients < 1 or args.duration <= 0:
         parser.error('--clients must be >= 1 and --duration > 0')
 
-    from jaco2_sim.scenario import load_scenario
+    from qtree_scene.scenario import load_scenario
 
     scenario = load_scenario(args.scenario)
     ids = {'obstacles': [o.id for o in scenario.obstacles], 'target': scenario.target.id}

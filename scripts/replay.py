@@ -205,7 +205,7 @@ def screenshot(rrd: Path, png: Path, *, settle_s: float = 3.0, port: int = 0) ->
 
 def _default_urdf() -> Path | None:
     try:
-        from jaco2_sim.model import urdf_path
+        from jaco2_description.model import urdf_path
     except ImportError:
         _LOG.warning('no /robot_description in the log and jaco2_sim not found: no robot shown')
         return None

@@ -67,7 +67,7 @@ fi
 # --- 3. colcon build of the workspace ------------------------------------------------------------
 want_build="$( (cd "$ROOT/ros2_ws/src" && find . -type f \( -name '*.msg' -o -name '*.srv' \
   -o -name '*.action' -o -name 'CMakeLists.txt' -o -name 'package.xml' -o -name 'setup.py' \
-  -o -name 'setup.cfg' -o -path '*/resources/*' \) -print0 | sort -z | xargs -0 sha256sum; \
+  -o -name 'setup.cfg' -o -path '*/resources/*' -o -path '*/urdf/*' -o -path '*/scenarios/*' \) -print0 | sort -z | xargs -0 sha256sum; \
   cat "$VENV_STAMP") | sha256sum | cut -d' ' -f1)"
 if [ -f "$BUILD_STAMP" ] && [ "$(cat "$BUILD_STAMP")" = "$want_build" ]; then
   say "workspace up to date (ros2_ws/install)"

@@ -32,7 +32,7 @@ from orchestration import NodeProcess, allocate_domain_id, start_node, stop_all
 pytestmark = pytest.mark.timeout(300)
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
-S1_YAML = REPO_ROOT / 'ros2_ws/src/jaco2_sim/jaco2_sim/resources/scenarios/s1.yaml'
+S1_YAML = REPO_ROOT / 'ros2_ws/src/qtree_scene/qtree_scene/scenarios/s1.yaml'
 FEASIBLE = 'O2'  # feasible on s1 with nothing relocated (checked in-process by the planner tests)
 TARGET = 'T'
 HUGE_INT = 10**400  # a YAML integer literal no float can hold
@@ -463,8 +463,8 @@ def _scenario_argument(directory: Path, content: Any) -> str:
     ('content', 'fragment'), [c[1:] for c in SCENARIO_CASES], ids=[c[0] for c in SCENARIO_CASES]
 )
 def test_load_scenario_rejects(tmp_path, content, fragment) -> None:
-    from jaco2_sim.exceptions import ScenarioError
-    from jaco2_sim.scenario import load_scenario
+    from qtree_scene.exceptions import ScenarioError
+    from qtree_scene.scenario import load_scenario
 
     with pytest.raises(ScenarioError) as info:
         load_scenario(_scenario_argument(tmp_path, content))
@@ -502,7 +502,7 @@ def _trajectory(points: list[tuple[float, list[float], list[float]]], names: lis
 
 
 def _home_plus(**joint_values: float) -> list[float]:
-    from jaco2_sim.model import HOME
+    from jaco2_description.model import HOME
 
     q = [float(v) for v in HOME]
     for key, value in joint_values.items():
@@ -511,7 +511,7 @@ def _home_plus(**joint_values: float) -> list[float]:
 
 
 def _arm() -> list[str]:
-    from jaco2_sim.model import ARM_JOINTS
+    from jaco2_description.model import ARM_JOINTS
 
     return list(ARM_JOINTS)
 
@@ -572,7 +572,7 @@ def test_bad_trajectory_is_rejected_and_sim_keeps_publishing(g, case) -> None:
 
 @pytest.mark.parametrize('value', [0.3, -1e300], ids=['slightly below', 'minus 1e300'])
 def test_trajectory_beyond_joint_limits_is_clamped(g, value) -> None:
-    from jaco2_sim.model import arm_limits
+    from jaco2_description.model import arm_limits
 
     assert g.reset('s1').success
     mark = g.log_mark('sim_node')

@@ -151,8 +151,9 @@ def test_huge_relocated_list(graph: Limits, label, object_id, relocated, code) -
 
 
 def test_scene_with_200_objects(graph: Limits, tmp_path: Path) -> None:
-    from jaco2_sim.scenario import dump_scenario, generate_clutter
     from qtree_msgs.srv import RelocateObject, ResetScene
+    from qtree_scene.generator import generate_clutter
+    from qtree_scene.scenario import dump_scenario
 
     path = tmp_path / 'clutter200.yaml'
     path.write_text(dump_scenario(generate_clutter(200, 0.3, seed=0)))
@@ -191,7 +192,7 @@ def test_scene_with_200_objects(graph: Limits, tmp_path: Path) -> None:
 @pytest.mark.parametrize('n', [10_000, 100_000])
 def test_long_trajectory(graph: Limits, n: int) -> None:
     from builtin_interfaces.msg import Duration
-    from jaco2_sim.model import ARM_JOINTS, HOME
+    from jaco2_description.model import ARM_JOINTS, HOME
     from qtree_msgs.srv import ResetScene
     from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 

@@ -39,7 +39,7 @@ def replay(*args: str, timeout: float = 60) -> subprocess.CompletedProcess[str]:
 
 @pytest.fixture
 def log(tmp_path: Path) -> Path:
-    from jaco2_sim.model import urdf_text
+    from jaco2_description.model import urdf_text
 
     path = tmp_path / 'run.mcap'
     FX.write_run(path, urdf_text=urdf_text())

@@ -26,7 +26,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
-S1_YAML = REPO_ROOT / 'ros2_ws/src/jaco2_sim/jaco2_sim/resources/scenarios/s1.yaml'
+S1_YAML = REPO_ROOT / 'ros2_ws/src/qtree_scene/qtree_scene/scenarios/s1.yaml'
 FUZZ = settings(
     max_examples=150,
     deadline=2000,  # [ms] per example
@@ -103,9 +103,9 @@ def mutated_s1(draw: st.DrawFn) -> dict:
 
 
 def _assert_valid_or_named(data: Any, source: str = 'fuzz') -> None:
-    from jaco2_sim.exceptions import ScenarioError
-    from jaco2_sim.scenario import parse_scenario
-    from jaco2_sim.scene import Scenario
+    from qtree_scene.exceptions import ScenarioError
+    from qtree_scene.scenario import parse_scenario
+    from qtree_scene.scene import Scenario
 
     try:
         scenario = parse_scenario(data, source=source)
@@ -134,8 +134,8 @@ def test_parse_scenario_mutated_s1(data: dict) -> None:
 
 @pytest.mark.parametrize('where', ['top level', 'object'])
 def test_unknown_empty_key_is_named(where: str) -> None:
-    from jaco2_sim.exceptions import ScenarioError
-    from jaco2_sim.scenario import parse_scenario
+    from qtree_scene.exceptions import ScenarioError
+    from qtree_scene.scenario import parse_scenario
 
     data = copy.deepcopy(s1_mapping())
     (data if where == 'top level' else data['objects'][0])[''] = 1
@@ -148,8 +148,8 @@ def test_unknown_empty_key_is_named(where: str) -> None:
 @settings(FUZZ, max_examples=60)
 @given(data=st.one_of(mutated_s1(), VALUES))
 def test_load_scenario_yaml_files(tmp_path_factory: pytest.TempPathFactory, data: Any) -> None:
-    from jaco2_sim.exceptions import ScenarioError
-    from jaco2_sim.scenario import load_scenario
+    from qtree_scene.exceptions import ScenarioError
+    from qtree_scene.scenario import load_scenario
 
     path = tmp_path_factory.mktemp('fuzz') / 'scenario.yaml'
     path.write_text(yaml.safe_dump(data))
@@ -162,8 +162,8 @@ def test_load_scenario_yaml_files(tmp_path_factory: pytest.TempPathFactory, data
 @settings(FUZZ, max_examples=60)
 @given(raw=st.binary(max_size=200) | st.text(max_size=200).map(str.encode))
 def test_load_scenario_random_bytes(tmp_path_factory: pytest.TempPathFactory, raw: bytes) -> None:
-    from jaco2_sim.exceptions import ScenarioError
-    from jaco2_sim.scenario import load_scenario
+    from qtree_scene.exceptions import ScenarioError
+    from qtree_scene.scenario import load_scenario
 
     path = tmp_path_factory.mktemp('fuzz') / 'scenario.yaml'
     path.write_bytes(raw)
@@ -178,8 +178,9 @@ def test_load_scenario_random_bytes(tmp_path_factory: pytest.TempPathFactory, ra
     seed=st.integers(0, 2**32 - 1),
 )
 def test_generate_clutter_valid_or_scenario_error(n_objects: Any, density: float, seed: int):
-    from jaco2_sim.exceptions import ScenarioError
-    from jaco2_sim.scenario import generate_clutter, validate_scenario
+    from qtree_scene.exceptions import ScenarioError
+    from qtree_scene.generator import generate_clutter
+    from qtree_scene.scenario import validate_scenario
 
     try:
         scenario = generate_clutter(n_objects, density, seed)
@@ -193,7 +194,7 @@ def test_generate_clutter_valid_or_scenario_error(n_objects: Any, density: float
 # --- RelocateObject request fields against the in-process MotionPlanner -----------------------
 @functools.cache
 def planner() -> Any:
-    from jaco2_sim.scenario import load_scenario
+    from qtree_scene.scenario import load_scenario
     from stpik_motion_planner.planner import MotionPlanner
 
     return MotionPlanner(load_scenario('s1'))

@@ -7,7 +7,7 @@ objects; nothing here says which object occludes which.
 from __future__ import annotations
 
 import pytest
-from jaco2_sim.scenario import load_scenario
+from qtree_scene.scenario import load_scenario
 from qtree_task_planner.exact import solve_exact
 from qtree_task_planner.oracle import MotionPlannerOracle
 

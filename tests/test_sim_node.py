@@ -9,7 +9,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from builtin_interfaces.msg import Duration
-from jaco2_sim.model import ARM_JOINTS, FINGER_JOINTS, HOME, Jaco2Model, arm_limits
+from jaco2_description.model import ARM_JOINTS, FINGER_JOINTS, HOME, Jaco2Model, arm_limits
 from qtree_msgs.msg import ObjectState, Scene
 from qtree_msgs.srv import AttachObject, ResetScene
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy

@@ -22,7 +22,7 @@ READY_TIMEOUT_S = 90.0
 @functools.cache
 def exact_s1() -> Any:
     """Exact optimum of s1 from the real in-process planner (shared by the tests)."""
-    from jaco2_sim.scenario import load_scenario
+    from qtree_scene.scenario import load_scenario
     from qtree_task_planner.exact import solve_exact
     from qtree_task_planner.oracle import MotionPlannerOracle
 

@@ -11,13 +11,13 @@ import pinocchio as pin
 import rclpy.serialization
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Pose, Vector3
+from jaco2_description.model import ARM_JOINTS, BASE_LINK, FINGER_JOINTS
 from qtree_msgs.msg import ObjectState, Scene
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from jaco2_sim.exceptions import TrajectoryError
-from jaco2_sim.model import ARM_JOINTS, BASE_LINK, FINGER_JOINTS
 from jaco2_sim.world import World
 
 ROLES = {

@@ -15,9 +15,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from jaco2_description.model import ARM_JOINTS, JointLimits
 
 from jaco2_sim.exceptions import TrajectoryError
-from jaco2_sim.model import ARM_JOINTS, JointLimits
 
 GOAL_TOLERANCE = 1e-4  # a reference is finished when every joint is this close to its end [rad]
 

@@ -24,8 +24,10 @@ from typing import Any
 
 import numpy as np
 import rclpy
+from jaco2_description.model import FINGER_JOINTS, Jaco2Model, urdf_text
 from qtree_msgs.msg import Scene
 from qtree_msgs.srv import AttachObject, ResetScene
+from qtree_scene.scenario import load_scenario
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import InvalidParameterValueException, ParameterUninitializedException
 from rclpy.executors import ExternalShutdownException
@@ -44,10 +46,8 @@ from jaco2_sim.conversions import (
     scene_msg,
     trajectory_arrays,
 )
-from jaco2_sim.exceptions import Jaco2SimError, TrajectoryError
+from jaco2_sim.exceptions import Jaco2SimError, ModelError, ScenarioError, TrajectoryError
 from jaco2_sim.integrator import JointIntegrator
-from jaco2_sim.model import FINGER_JOINTS, Jaco2Model, urdf_text
-from jaco2_sim.scenario import load_scenario
 from jaco2_sim.world import World
 
 LATCHED_QOS = QoSProfile(  # /scene and /robot_description
@@ -137,7 +137,7 @@ class Jaco2SimNode(Node):
                     return SetParametersResult(
                         successful=False, reason='finger_angle_rad is fixed at start'
                     )
-            except (Jaco2SimError, TypeError, ValueError) as err:
+            except (Jaco2SimError, ModelError, ScenarioError, TypeError, ValueError) as err:
                 return SetParametersResult(successful=False, reason=f'{p.name}: {err}')
             except Exception as err:  # a bad value must not kill the node
                 reason = f'{p.name}: unexpected {type(err).__name__}: {err}'
@@ -206,7 +206,7 @@ class Jaco2SimNode(Node):
             return
         try:
             clamped = self.sim.set_reference(*trajectory_arrays(msg))
-        except Jaco2SimError as err:
+        except (Jaco2SimError, ModelError, ScenarioError) as err:
             self._reject_trajectory(str(err))
             return
         if clamped:
@@ -217,7 +217,7 @@ class Jaco2SimNode(Node):
         name = request.scenario or self.scenario.source or self.scenario.name
         try:
             self._load(name)
-        except Jaco2SimError as err:
+        except (Jaco2SimError, ModelError, ScenarioError) as err:
             response.success, response.message = False, str(err)
             self.get_logger().warning(f'reset_scene failed: {err}')
             return response
@@ -244,7 +244,7 @@ class Jaco2SimNode(Node):
                 )
                 self.world.detach(request.object_id, status)
                 response.message = f'{request.object_id} released ({status})'
-        except Jaco2SimError as err:
+        except (Jaco2SimError, ModelError, ScenarioError) as err:
             response.success, response.message = False, str(err)
             return response
         response.success = True
@@ -261,7 +261,7 @@ def main(args: list[str] | None = None) -> None:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except (Jaco2SimError, InvalidParameterValueException) as err:
+    except (Jaco2SimError, ModelError, ScenarioError, InvalidParameterValueException) as err:
         rclpy.logging.get_logger('jaco2_sim').fatal(f'cannot start: {err}')
         sys.exit(2)
     finally:

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from qtree_scene.scene import ObjectSpec, Scenario, Status
 
 from jaco2_sim.exceptions import WorldError
-from jaco2_sim.scene import ObjectSpec, Scenario, Status
 
 RELEASE_STATUSES: tuple[Status, ...] = ('in_clutter', 'relocated')
 

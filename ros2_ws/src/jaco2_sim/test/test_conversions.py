@@ -7,9 +7,9 @@ import time
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Duration
+from jaco2_description.model import ARM_JOINTS, HOME
 from jaco2_sim.conversions import MAX_SCANNED_NAMES, trajectory_arrays, trajectory_size
 from jaco2_sim.exceptions import TrajectoryError
-from jaco2_sim.model import ARM_JOINTS, HOME
 from rclpy.serialization import deserialize_message, serialize_message
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from jaco2_description.model import ARM_JOINTS, HOME, arm_limits
 from jaco2_sim.exceptions import TrajectoryError
 from jaco2_sim.integrator import GOAL_TOLERANCE, JointIntegrator
-from jaco2_sim.model import ARM_JOINTS, HOME, arm_limits
 
 LIMITS = arm_limits()
 

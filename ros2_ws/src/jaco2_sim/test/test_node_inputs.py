@@ -13,8 +13,8 @@ from typing import Any
 
 import pytest
 import yaml
-from jaco2_sim.model import ARM_JOINTS, HOME
-from jaco2_sim.scenario import SCENARIO_DIR
+from jaco2_description.model import ARM_JOINTS, HOME
+from qtree_scene.scenario import SCENARIO_DIR
 
 HUGE_INT = 10**400
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from jaco2_description.model import HOME, Jaco2Model
 from jaco2_sim.exceptions import WorldError
-from jaco2_sim.model import HOME, Jaco2Model
-from jaco2_sim.scenario import load_scenario
 from jaco2_sim.world import World
+from qtree_scene.scenario import load_scenario
 
 
 @pytest.fixture

@@ -8,7 +8,7 @@ from pathlib import Path
 from types import SimpleNamespace as Msg
 
 import pytest
-from jaco2_sim import model as jaco2_model
+from jaco2_description import model as jaco2_model
 from qtree_recorder import graph_topics
 from qtree_recorder.mcap_log import McapLog
 from qtree_recorder.qos import QosProfileData

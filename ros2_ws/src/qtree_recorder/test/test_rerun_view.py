@@ -44,7 +44,7 @@ def _scene() -> list[dict]:
 
 @pytest.fixture
 def urdf() -> Path:
-    from jaco2_sim.model import urdf_path
+    from jaco2_description.model import urdf_path
 
     return urdf_path()
 
@@ -79,7 +79,7 @@ def test_saved_rrd_holds_every_part_of_the_view(tmp_path: Path, urdf: Path) -> N
 
 def test_joint_transforms_equal_the_kinematic_model(tmp_path: Path, urdf: Path) -> None:
     """Each logged joint transform is the parent→child placement Pinocchio computes (at Home)."""
-    from jaco2_sim.model import link_placements
+    from jaco2_description.model import link_placements
 
     rrd = tmp_path / 'joints.rrd'
     view = RunView(mode='save', rrd_path=rrd, urdf_path=urdf)

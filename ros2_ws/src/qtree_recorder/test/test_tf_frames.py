@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
-from jaco2_sim import model as jaco2_model
+from jaco2_description import model as jaco2_model
 from mcap_ros2._dynamic import generate_dynamic
 from qtree_recorder.definitions import DefinitionLibrary
 from qtree_recorder.encoding import DynamicEncoder

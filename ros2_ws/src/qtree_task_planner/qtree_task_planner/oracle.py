@@ -102,7 +102,7 @@ class MotionPlannerOracle:
     """The real in-process motion planner (``stpik_motion_planner.planner.MotionPlanner``).
 
     Args:
-        scenario: a ``jaco2_sim.scene.Scenario`` or an installed scenario name (``'s1'``).
+        scenario: a ``qtree_scene.scene.Scenario`` or an installed scenario name (``'s1'``).
         planner: an existing ``MotionPlanner`` to reuse (its cache persists across trainings).
 
     Attributes:
@@ -115,7 +115,7 @@ class MotionPlannerOracle:
             from stpik_motion_planner.planner import MotionPlanner  # lazy: heavy imports
 
             if isinstance(scenario, str):
-                from jaco2_sim.scenario import load_scenario
+                from qtree_scene.scenario import load_scenario
 
                 scenario = load_scenario(scenario)
             planner = MotionPlanner(scenario)

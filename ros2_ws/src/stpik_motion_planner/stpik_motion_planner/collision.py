@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import fcl
 import numpy as np
 import pinocchio as pin
-from jaco2_sim.scene import ObjectSpec
+from qtree_scene.scene import ObjectSpec
 
 _REQUEST = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
 # Links of the 7-DoF Jaco² (short names) in the groups whose cross pairs are all non-adjacent.

@@ -11,10 +11,10 @@ import math
 import numpy as np
 from builtin_interfaces.msg import Duration, Time
 from geometry_msgs.msg import Pose, PoseArray
-from jaco2_sim.model import ARM_JOINTS, HOME
-from jaco2_sim.scene import ObjectSpec, Scenario
+from jaco2_description.model import ARM_JOINTS, HOME
 from qtree_msgs.msg import ObjectState, PlanningEvent, Scene
 from qtree_msgs.srv import RelocateObject
+from qtree_scene.scene import ObjectSpec, Scenario
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 

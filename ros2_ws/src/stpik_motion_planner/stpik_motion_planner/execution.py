@@ -14,7 +14,7 @@ import math
 import time
 
 import numpy as np
-from jaco2_sim.model import ARM_JOINTS
+from jaco2_description.model import ARM_JOINTS
 from qtree_msgs.msg import ObjectState
 from qtree_msgs.srv import AttachObject
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup

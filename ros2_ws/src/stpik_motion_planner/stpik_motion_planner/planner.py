@@ -14,9 +14,9 @@ from collections.abc import Iterable
 
 import numpy as np
 import pinocchio as pin
-from jaco2_sim.model import Jaco2Model
-from jaco2_sim.scene import ObjectSpec, Scenario
+from jaco2_description.model import Jaco2Model
 from ompl import util as ou
+from qtree_scene.scene import ObjectSpec, Scenario
 
 from stpik_motion_planner.cache import FeasibilityCache
 from stpik_motion_planner.cartesian_path import (

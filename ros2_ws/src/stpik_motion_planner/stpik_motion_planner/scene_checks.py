@@ -6,7 +6,7 @@ import math
 from collections import Counter
 from collections.abc import Sequence
 
-from jaco2_sim.scene import Scenario
+from qtree_scene.scene import Scenario
 
 from stpik_motion_planner.exceptions import InvalidRequest
 from stpik_motion_planner.result import Reason

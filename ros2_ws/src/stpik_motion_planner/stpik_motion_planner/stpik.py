@@ -17,7 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
-from jaco2_sim.model import EE_FRAME, Jaco2Model
+from jaco2_description.model import EE_FRAME, Jaco2Model
 
 from stpik_motion_planner.collision import RobotBodies, SceneWorld
 from stpik_motion_planner.config import PlannerConfig

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import pytest
-from jaco2_sim.model import Jaco2Model
-from jaco2_sim.scene import ObjectSpec, Scenario
+from jaco2_description.model import Jaco2Model
+from qtree_scene.scene import ObjectSpec, Scenario
 
 TABLE = ObjectSpec('table', 'static', 'box', (0.35, 0.0, -0.025), size=(1.2, 1.4, 0.05))
 HOME = (4.71, 2.84, 0.0, 0.75, 4.62, 4.48, 4.88)

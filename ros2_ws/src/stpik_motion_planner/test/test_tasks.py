@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from jaco2_sim.scene import ObjectSpec
+from qtree_scene.scene import ObjectSpec
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.stpik import Stpik

@@ -1,6 +1,7 @@
 """Kinova Jaco² j2s7s300 model: URDF → Pinocchio (kinematics) and python-fcl (collision). No ROS.
 
-The URDF (``resources/urdf/j2s7s300.urdf``) follows KINOVA_FACTS.md; its joints 1, 3, 5 and 7 are
+The URDF (``urdf/j2s7s300.urdf``, installed to ``share/jaco2_description/urdf/``) follows
+KINOVA_FACTS.md; its joints 1, 3, 5 and 7 are
 ``continuous`` as in kinova-ros. Pinocchio turns a continuous joint into a unit-circle joint with
 nq = 2 (cos θ, sin θ) and nv = 1, which breaks the plain ``q ∈ ℝ^7`` arithmetic of the STPIK
 planner (eq. 6 integrates q̇ ∈ ℝ^7 into q). The loader therefore rewrites every continuous joint
@@ -17,7 +18,6 @@ Two models are offered:
 from __future__ import annotations
 
 import functools
-import importlib.resources
 import math
 import pathlib
 import xml.etree.ElementTree as ET
@@ -27,7 +27,7 @@ import fcl
 import numpy as np
 import pinocchio as pin
 
-from jaco2_sim.exceptions import ModelError
+from jaco2_description.exceptions import ModelError
 
 PREFIX = 'j2s7s300_'
 ARM_JOINTS: tuple[str, ...] = tuple(f'{PREFIX}joint_{i}' for i in range(1, 8))
@@ -44,10 +44,25 @@ FINGER_MAX = 1.51  # proximal finger upper limit [rad]
 FINGER_OPEN = 0.2  # MoveIt "Open" [rad]
 
 
+URDF_NAME = 'j2s7s300.urdf'
+
+
 def urdf_path() -> pathlib.Path:
-    """Path of the j2s7s300 URDF file (source tree or installed package)."""
-    resource = importlib.resources.files('jaco2_sim') / 'resources' / 'urdf' / 'j2s7s300.urdf'
-    return pathlib.Path(str(resource))
+    """Path of the j2s7s300 URDF: ``share/jaco2_description/urdf/`` if installed, else the source.
+
+    The installed path is found through the ament index (``ament_index_python``, plain Python,
+    no rclpy); without an index (a bare checkout on ``PYTHONPATH``) the file beside the package.
+    """
+    try:
+        from ament_index_python.packages import get_package_share_directory
+
+        share = pathlib.Path(get_package_share_directory('jaco2_description'))
+        installed = share / 'urdf' / URDF_NAME
+        if installed.is_file():
+            return installed
+    except (ImportError, LookupError, ValueError):
+        pass
+    return pathlib.Path(__file__).resolve().parent.parent / 'urdf' / URDF_NAME
 
 
 @functools.cache

@@ -1,4 +1,4 @@
-"""Tests of jaco2_sim.model: URDF, Pinocchio FK/Jacobian, FCL geometry, full model for /tf."""
+"""Tests of jaco2_description.model: URDF, Pinocchio FK/Jacobian, FCL geometry, full model."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import fcl
 import numpy as np
 import pinocchio as pin
 import pytest
-from jaco2_sim.exceptions import ModelError
-from jaco2_sim.model import (
+from jaco2_description.exceptions import ModelError
+from jaco2_description.model import (
     ARM_JOINTS,
     CANDLE,
     EE_FRAME,

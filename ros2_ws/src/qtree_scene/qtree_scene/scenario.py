@@ -1,4 +1,4 @@
-"""Scenario files: YAML → validated :class:`~jaco2_sim.scene.Scenario`, and a seeded generator.
+"""Scenario files: YAML → validated :class:`~qtree_scene.scene.Scenario`, and a seeded generator.
 
 World frame = robot base frame (``j2s7s300_link_base`` at the origin, z up). The table is a static
 box whose top face is at z = 0; every object stands on it (centre z = height / 2).
@@ -44,15 +44,15 @@ from collections.abc import Callable
 from typing import Any
 
 import yaml
+from jaco2_description.model import HOME, arm_limits
 
-from jaco2_sim.exceptions import ScenarioError
-from jaco2_sim.footprint import Footprint, footprint_of, overlap
-from jaco2_sim.model import HOME, arm_limits
-from jaco2_sim.scene import ObjectSpec, Scenario
+from qtree_scene.exceptions import ScenarioError
+from qtree_scene.footprint import Footprint, footprint_of, overlap
+from qtree_scene.scene import ObjectSpec, Scenario
 
 TABLE_ID = 'table'
 DEFAULT_KEEPOUT = 0.2  # [m]
-SCENARIO_DIR = pathlib.Path(__file__).resolve().parent / 'resources' / 'scenarios'
+SCENARIO_DIR = pathlib.Path(__file__).resolve().parent / 'scenarios'
 _TOP = {'name', 'description', 'home', 'robot_keepout_radius', 'table', 'drop_zone', 'objects'}
 _BOX = {'center_xy', 'size'}
 _OBJECT = {'id', 'role', 'shape', 'xy', 'radius', 'height', 'size', 'yaw'}
@@ -365,10 +365,3 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
 def dump_scenario(scenario: Scenario) -> str:
     """YAML text of ``scenario``; :func:`parse_scenario` of it gives back an equal scenario."""
     return yaml.safe_dump(scenario_to_dict(scenario), sort_keys=False, default_flow_style=None)
-
-
-def generate_clutter(n_objects: int, density: float, seed: int, **options: Any) -> Scenario:
-    """Seeded random clutter; see :func:`jaco2_sim.generator.generate_clutter`."""
-    from jaco2_sim.generator import generate_clutter as generate
-
-    return generate(n_objects, density, seed, **options)

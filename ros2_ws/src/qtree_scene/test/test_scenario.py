@@ -1,4 +1,4 @@
-"""Tests of jaco2_sim.scenario / generator / footprint: loading, validation, seeded generation."""
+"""Tests of qtree_scene.scenario / generator / footprint: loading, validation, generation."""
 
 from __future__ import annotations
 
@@ -11,12 +11,12 @@ import pytest
 import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from jaco2_sim.exceptions import ScenarioError
-from jaco2_sim.footprint import Footprint, overlap
-from jaco2_sim.scenario import (
+from qtree_scene.exceptions import ScenarioError
+from qtree_scene.footprint import Footprint, overlap
+from qtree_scene.generator import generate_clutter
+from qtree_scene.scenario import (
     TABLE_ID,
     dump_scenario,
-    generate_clutter,
     list_scenarios,
     load_scenario,
     parse_scenario,

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jaco2_sim.scene import ObjectSpec
+from qtree_scene.scene import ObjectSpec
 
 
 @dataclass(frozen=True)

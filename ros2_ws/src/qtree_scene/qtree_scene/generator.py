@@ -12,11 +12,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from jaco2_description.model import HOME
 
-from jaco2_sim.exceptions import ScenarioError
-from jaco2_sim.model import HOME
-from jaco2_sim.scenario import TABLE_ID, validate_scenario
-from jaco2_sim.scene import ObjectSpec, Scenario
+from qtree_scene.exceptions import ScenarioError
+from qtree_scene.scenario import TABLE_ID, validate_scenario
+from qtree_scene.scene import ObjectSpec, Scenario
 
 MAX_DENSITY = 0.4  # random sequential addition jams near 0.55; stay well below [-]
 ASPECT = 1.75  # region width (y) / depth (x) [-]
