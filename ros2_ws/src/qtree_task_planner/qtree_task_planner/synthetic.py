@@ -75,3 +75,29 @@ def synthetic_scenario(name: str) -> tuple[tuple[str, ...], dict[str, list[set[s
     """
     n_obstacles, seed = SYNTHETIC_SCENARIOS[name]
     return random_requirements(n_obstacles, np.random.default_rng(seed), p_blocked=0.6)
+
+
+def decoy_requirements(
+    n_chain: int, n_decoys: int
+) -> tuple[tuple[str, ...], dict[str, list[set[str]]]]:
+    """An abstract decoy scene: a blocking chain plus free, useless decoys.
+
+    T needs ``C1`` gone, ``C1`` needs ``C2`` gone, …, ``C{n_chain}`` is free; the decoys
+    ``D1``… are always feasible and never help. The unique optimum relocates the chain from its
+    far end, level ``n_chain + 1``; the decoys only widen the search (the issue #14 profile).
+
+    Args:
+        n_chain: chain length >= 0.
+        n_decoys: number of decoys >= 0.
+
+    Returns:
+        (obstacle ids, chain first then decoys; requirements for :class:`TableOracle`).
+    """
+    if n_chain < 0 or n_decoys < 0:
+        raise ValueError(f'n_chain and n_decoys must be >= 0, got {n_chain}, {n_decoys}')
+    chain = [f'C{i + 1}' for i in range(n_chain)]
+    decoys = [f'D{i + 1}' for i in range(n_decoys)]
+    requirements: dict[str, list[set[str]]] = {}
+    for blocked, blocker in zip(['T', *chain], chain, strict=False):
+        requirements[blocked] = [{blocker}]
+    return (*chain, *decoys), requirements
