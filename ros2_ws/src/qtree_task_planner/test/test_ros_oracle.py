@@ -56,3 +56,37 @@ def test_request_errors_and_timeouts_raise() -> None:
     no_scene = ScriptedClient(*[Response(reason=Response.NO_SCENE, message='none')] * 5)
     with pytest.raises(OracleUnavailableError, match='none'):
         RosPlannerOracle(no_scene, 1.0, scene_wait_s=0.3).feasible((), 'O1')
+
+
+class _WithBlockers(Response):
+    """A response carrying the issue #14 blocker fields (until they land in the .srv)."""
+
+    def __init__(self, blocking_ids=(), blocked_by_immovable=False, **kw) -> None:
+        super().__init__(**kw)
+        self.__dict__['_ids'] = list(blocking_ids)
+        self.__dict__['_immovable'] = blocked_by_immovable
+
+    @property
+    def blocking_ids(self):
+        return self.__dict__['_ids']
+
+    @property
+    def blocked_by_immovable(self):
+        return self.__dict__['_immovable']
+
+
+def test_answer_reads_blocking_ids() -> None:
+    blocked = Response.SCENE_COLLISION
+    client = ScriptedClient(
+        Response(feasible=True, reason=Response.SUCCESS),
+        _WithBlockers(['O1', 'O3', 'O2'], feasible=False, reason=blocked),
+        _WithBlockers([], True, feasible=False, reason=Response.JOINT_LIMIT),
+        Response(feasible=False, reason=Response.TIMEOUT),
+        _WithBlockers([], feasible=False, reason=blocked),
+    )
+    oracle = RosPlannerOracle(client, 1.0, 1.0)
+    assert oracle.answer((), 'O1') == (True, ())
+    assert oracle.answer(('O3',), 'T') == (False, ('O1', 'O2'))  # relocated ids dropped
+    assert oracle.answer((), 'T') == (False, ())  # blocked by nothing movable
+    assert oracle.answer((), 'T') == (False, None)  # a time-out reports nobody
+    assert oracle.answer((), 'T') == (False, None)  # no blocker named: no report
