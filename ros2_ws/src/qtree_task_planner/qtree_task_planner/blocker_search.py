@@ -41,6 +41,7 @@ certified under the same conditions.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from qtree_task_planner.exceptions import InvalidParameterError, InvalidScenarioError
@@ -52,6 +53,7 @@ STATUS_BUDGET = 'budget'
 BUDGET_RUNS = 'planner_runs'
 BUDGET_TIME = 'time'
 BUDGET_EXPANSIONS = 'expansions'
+BUDGET_CANCELLED = 'cancelled'
 
 
 @dataclass(frozen=True)
@@ -143,6 +145,9 @@ class BlockerSearch:
         oracle: any feasibility oracle; blocker reports are read through
             :func:`~qtree_task_planner.oracle.ask`.
         config: budget and options.
+        on_candidate: called after each tested candidate with the objects walked (the last may
+            have failed) and whether the target was reached; returning False cancels the search
+            (``budget_hit='cancelled'``).
 
     Raises:
         InvalidScenarioError: the target is an obstacle, or duplicate ids.
@@ -154,6 +159,7 @@ class BlockerSearch:
         target_id: str,
         oracle: FeasibilityOracle,
         config: BlockerSearchConfig | None = None,
+        on_candidate: Callable[[tuple[str, ...], bool], bool] | None = None,
     ) -> None:
         obstacles = tuple(obstacle_ids)
         if target_id in obstacles:
@@ -164,6 +170,7 @@ class BlockerSearch:
         self.target = target_id
         self.oracle = oracle
         self.config = config or BlockerSearchConfig()
+        self.on_candidate = on_candidate
         self.rank = {o: i for i, o in enumerate(obstacles)}
         self.all = frozenset(obstacles)
         sound = bool(getattr(oracle, 'sound_blockers', False))
@@ -291,10 +298,16 @@ class BlockerSearch:
     def _test(self, order: list[str]) -> bool:
         """Relocate the candidate in its order, then the target; False at the first failure."""
         self.candidates += 1
-        for i, obj in enumerate(order):
+        walked: list[str] = []
+        reached = True
+        for i, obj in enumerate((*order, self.target)):
+            walked.append(obj)
             if not self.query(tuple(order[:i]), obj):
-                return False
-        return self.query(tuple(order), self.target)
+                reached = False
+                break
+        if self.on_candidate is not None and self.on_candidate(tuple(walked), reached) is False:
+            raise _BudgetExceededError(BUDGET_CANCELLED)
+        return reached
 
     # -- driver --
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from qtree_task_planner.exceptions import InvalidParameterError
-from qtree_task_planner.policies import canonical_policy_name
+from qtree_task_planner.planners import canonical_planner_name
 from qtree_task_planner.training import TrainingConfig
 
 
@@ -43,7 +43,7 @@ def settings_from_goal(goal: Any) -> GoalSettings:
     Raises:
         InvalidParameterError: the first invalid field (the message names it).
     """
-    policy = canonical_policy_name(str(goal.policy))
+    policy = canonical_planner_name(str(goal.policy))
     for name in ('epsilon0', 'epsilon_min'):
         value = float(getattr(goal, name))
         if not 0.0 < value <= 1.0:

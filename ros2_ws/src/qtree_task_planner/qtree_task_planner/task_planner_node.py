@@ -42,8 +42,9 @@ from qtree_task_planner.messages import (
     stats_msg,
     tree_msg,
 )
+from qtree_task_planner.planners import make_trainer
 from qtree_task_planner.ros_oracle import RosPlannerOracle, execute_sequence
-from qtree_task_planner.training import STOP_CANCELLED, QTreeTrainer
+from qtree_task_planner.training import STOP_CANCELLED
 
 LATCHED_QOS = QoSProfile(  # /scene and /qtree: late joiners get the last message
     depth=1,
@@ -160,7 +161,7 @@ class TaskPlannerNode(Node):
             self._param('scene_wait_s'),
             self.stopping,
         )
-        trainer = QTreeTrainer(movable, target, oracle, settings.config)
+        trainer = make_trainer(movable, target, oracle, settings.config)
         every = settings.feedback_every
 
         def on_episode(stats) -> bool:
