@@ -183,6 +183,7 @@ class BlockerSearch:
         self.queries = self.verifications = self.candidates = self.expansions = 0
         self.lower_bound = 1
         self._cut = False
+        self._failed: dict[frozenset[str], bool] = {}
         self._runs0 = oracle.planner_runs
         self._start = time.monotonic()
 
@@ -264,12 +265,29 @@ class BlockerSearch:
             union |= min(unmet, key=len) - chosen
         return sorted(union, key=self.rank.__getitem__)
 
-    def _candidate(self, k: int) -> list[str] | None:
-        """The first candidate with at most ``k`` obstacles (in its order), or None."""
-        failed: set[frozenset[str]] = set()
-        self._cut = False
+    def _disjoint_unmet(self, chosen: frozenset[str], order: list[str]) -> int:
+        """How many more objects any candidate containing ``chosen`` needs at least: a greedy
+        packing of pairwise disjoint unmet constraints that no object of ``chosen`` can meet."""
+        done = frozenset(order)
+        needs = [c for c in self.constraints.get(self.target, ()) if not c & chosen]
+        for obj in chosen - done:
+            needs += [c for c in self.constraints.get(obj, ()) if not c & chosen]
+        count, used = 0, set()
+        for c in sorted(needs, key=len):
+            if not c & used:
+                count += 1
+                used |= c
+        return count
 
-        def dfs(chosen: frozenset[str]) -> list[str] | None:
+    def _candidate(self, k: int) -> list[str] | None:
+        """The first candidate with at most ``k`` obstacles (in its order), or None.
+
+        Sets shown to have no candidate superset of size <= k stay in ``self._failed`` until k
+        grows: more constraints never create a candidate.
+        """
+        failed = self._failed  # set -> whether the size bound cut its sub-tree
+
+        def dfs(chosen: frozenset[str]) -> tuple[list[str] | None, bool]:
             self.expansions += 1
             if self.expansions > self.config.max_expansions:
                 raise _BudgetExceededError(BUDGET_EXPANSIONS)
@@ -280,20 +298,32 @@ class BlockerSearch:
             order = self._closure(chosen)
             branch = self._branch(chosen, order)
             if branch is None:
-                return order
-            if branch and len(chosen) >= k:
-                self._cut = True  # a larger candidate may exist
-            if len(chosen) < k:
-                for obj in branch:
-                    child = chosen | {obj}
-                    if child not in failed:
-                        found = dfs(child)
-                        if found is not None:
-                            return found
-                        failed.add(child)
-            return None
+                return order, False
+            if not branch:
+                return None, False
+            if len(chosen) >= k or len(chosen) + self._disjoint_unmet(chosen, order) > k:
+                return None, True  # a larger candidate may exist
+            cut = False
+            for obj in branch:
+                child = chosen | {obj}
+                if child in failed:
+                    cut = cut or failed[child]
+                    continue
+                found, child_cut = dfs(child)
+                if found is not None:
+                    return found, False
+                failed[child] = child_cut
+                cut = cut or child_cut
+            return None, cut
 
-        return dfs(frozenset())
+        root: frozenset[str] = frozenset()
+        if root in failed:
+            self._cut = failed[root]
+            return None
+        found, self._cut = dfs(root)
+        if found is None:
+            failed[root] = self._cut
+        return found
 
     def _test(self, order: list[str]) -> bool:
         """Relocate the candidate in its order, then the target; False at the first failure."""
@@ -322,6 +352,7 @@ class BlockerSearch:
                     if not self._cut:  # no candidate of any size: unsolvable
                         break
                     k += 1
+                    self._failed = {}
                     continue
                 if self._test(order):
                     return self._result((*order, self.target), STATUS_OPTIMAL, '')
