@@ -166,7 +166,7 @@ def corridor_requirements(
             for j, d in enumerate(centres):
                 along = float(np.dot(d - c, u))
                 across = abs(float(np.cross(u, d - c)))
-                if j != i and 0.0 < along and across < half + radius:
+                if j != i and along > 0.0 and across < half + radius:
                     blocking.add(names[j])
             sets.append(blocking)
         if not any(not s for s in sets):
