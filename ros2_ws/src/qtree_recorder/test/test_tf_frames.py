@@ -1,4 +1,4 @@
-"""Arm /tf from joint states (qtree_recorder.tf_frames) against jaco2_description's model and FK facts."""
+"""Arm /tf from joint states (qtree_recorder.tf_frames) against jaco2_description's model."""
 
 from __future__ import annotations
 
