@@ -110,7 +110,7 @@ class NodeProcess:
         return self.process.poll() is None
 
     def log_text(self) -> str:
-        """Everything the node has written to stdout and stderr so far (also after :meth:`stop`)."""
+        """Everything the node wrote to stdout and stderr so far (also after :meth:`stop`)."""
         if not self._log.closed:
             self._log.flush()
         return self.log_path.read_text(errors='replace')
@@ -136,7 +136,7 @@ class NodeProcess:
         )
 
     def stop(self, timeout_s: float = 10.0, sig: int = signal.SIGINT) -> int:
-        """Send ``sig`` (SIGINT: Ctrl-C), then SIGKILL after ``timeout_s``; return the exit code."""
+        """Send ``sig`` (SIGINT: Ctrl-C), SIGKILL after ``timeout_s``; return the exit code."""
         if self.alive():
             self.process.send_signal(sig)
             try:

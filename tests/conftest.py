@@ -97,7 +97,7 @@ def ros_node(ros_domain: int) -> Iterator[Any]:
                 return entity.server_is_ready()
             return entity.service_is_ready()
 
-        names = [getattr(e, 'topic_name', None) or getattr(e, 'srv_name', repr(e)) for e in entities]
+        names = [getattr(e, 'topic_name', None) or getattr(e, 'srv_name', e) for e in entities]
         ok = spin_until(lambda: all(matched(e) for e in entities), timeout_s)
         assert ok, f'not matched within {timeout_s} s: {names}'
 
