@@ -27,6 +27,7 @@ from jaco2_description.model import FINGER_JOINTS, Jaco2Model, urdf_text
 from qtree_msgs.msg import Scene
 from qtree_msgs.srv import AttachObject, ResetScene
 from qtree_node_support.lifecycle import run_node
+from qtree_node_support.qos import SERVICE_QOS
 from qtree_scene.scenario import load_scenario
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import InvalidParameterValueException, ParameterUninitializedException
@@ -110,8 +111,10 @@ class Jaco2SimNode(Node):
         self.create_subscription(
             JointTrajectory, '/joint_trajectory', self._on_raw_trajectory, TRAJECTORY_QOS, raw=True
         )
-        self.create_service(ResetScene, '~/reset_scene', self._on_reset)
-        self.create_service(AttachObject, '~/attach_object', self._on_attach)
+        self.create_service(ResetScene, '~/reset_scene', self._on_reset, qos_profile=SERVICE_QOS)
+        self.create_service(
+            AttachObject, '~/attach_object', self._on_attach, qos_profile=SERVICE_QOS
+        )
         self.timer = self.create_timer(self.sim.period, self._on_timer)
         self.urdf_pub.publish(String(data=urdf_text()))
         self._publish_scene()

@@ -23,6 +23,7 @@ from qtree_msgs.msg import QTree as QTreeMsg
 from qtree_msgs.msg import Scene, TrainingStats
 from qtree_msgs.srv import RelocateObject
 from qtree_node_support.lifecycle import run_node
+from qtree_node_support.qos import SERVICE_QOS, action_server_qos
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.action import ActionServer, CancelResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
@@ -81,7 +82,7 @@ class TaskPlannerNode(Node):
         self._stats_pub = self.create_publisher(TrainingStats, '/training_stats', STATS_QOS)
         self._tree_pub = self.create_publisher(QTreeMsg, '/qtree', LATCHED_QOS)
         self._planner = self.create_client(
-            RelocateObject, '/relocate_object', callback_group=self._group
+            RelocateObject, '/relocate_object', qos_profile=SERVICE_QOS, callback_group=self._group
         )
         self._server = ActionServer(
             self,
@@ -90,6 +91,7 @@ class TaskPlannerNode(Node):
             execute_callback=self._execute,
             cancel_callback=lambda _: CancelResponse.ACCEPT,
             callback_group=self._group,
+            **action_server_qos(),
         )
         self.get_logger().info('task planner ready: action /retrieve_target')
 

@@ -35,6 +35,7 @@ import time
 from qtree_msgs.msg import ObjectState, PlanningEvent, Scene
 from qtree_msgs.srv import RelocateObject
 from qtree_node_support.lifecycle import run_node
+from qtree_node_support.qos import SERVICE_QOS
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
@@ -119,6 +120,7 @@ class MotionPlannerNode(Node):
             RelocateObject,
             '/relocate_object',
             self._on_relocate,
+            qos_profile=SERVICE_QOS,  # a burst of requests is queued, never dropped (#18)
             callback_group=ReentrantCallbackGroup(),
         )
         self.get_logger().info('motion_planner ready: serving /relocate_object')
