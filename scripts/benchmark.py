@@ -358,9 +358,23 @@ def reference(name: str, kind: str) -> tuple[dict, SharedOracle]:
     return info, shared
 
 
-def run_all(tasks: list[Task], workers: int, kind: str, warm: dict, ray_address: str | None):
-    """Run the tasks (in-process, process pool or Ray) with a progress bar."""
+def run_all(
+    tasks: list,
+    workers: int,
+    kind: str,
+    warm: dict,
+    ray_address: str | None,
+    fn=None,
+    desc: str = 'trainings',
+):
+    """Run the tasks (in-process, process pool or Ray) with a progress bar.
+
+    ``fn`` (default :func:`run_task`) runs one task in a worker; it must be importable by name
+    (``scripts/bench_scale.py`` passes ``qtree_task_planner.bench_scale.run_scene``).
+    """
     from tqdm import tqdm
+
+    fn = fn or run_task
 
     if ray_address:
         try:
@@ -372,9 +386,9 @@ def run_all(tasks: list[Task], workers: int, kind: str, warm: dict, ray_address:
         else:
             ray.init(address=ray_address)
         remote = ray.remote(_ray_task)
-        refs = [remote.remote(task, warm) for task in tasks]
+        refs = [remote.remote(task, warm, fn) for task in tasks]
         out = []
-        with tqdm(total=len(refs), desc='trainings') as bar:
+        with tqdm(total=len(refs), desc=desc) as bar:
             while refs:
                 done, refs = ray.wait(refs)
                 out += ray.get(done)
@@ -382,11 +396,9 @@ def run_all(tasks: list[Task], workers: int, kind: str, warm: dict, ray_address:
         return out
     if workers <= 1:
         _init_worker(kind, warm)
-        return [run_task(t) for t in tqdm(tasks, desc='trainings')]
+        return [fn(t) for t in tqdm(tasks, desc=desc)]
     with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(kind, warm)) as pool:
-        return list(
-            tqdm(pool.map(run_task, tasks, chunksize=1), total=len(tasks), desc='trainings')
-        )
+        return list(tqdm(pool.map(fn, tasks, chunksize=1), total=len(tasks), desc=desc))
 
 
 def run_ros(tasks: list[Task], timeout_s: float = 3600.0) -> list[dict]:
@@ -485,7 +497,9 @@ def run_ros(tasks: list[Task], timeout_s: float = 3600.0) -> list[dict]:
     return records
 
 
-def _ray_task(task: Task, warm: dict) -> dict:
+def _ray_task(task: Task, warm: dict, fn=None) -> dict:
+    if fn is not None and fn is not run_task:
+        return fn(task)
     if task.scenario not in _ORACLES:
         _init_worker(task.kind, {task.scenario: warm.get(task.scenario, {})})
     return run_task(task)
