@@ -90,6 +90,8 @@ def fill_relocate_response(
     response.from_cache = result.from_cache
     response.trajectory = trajectory_msg(result.times, result.joint_trajectory)
     response.ee_path = pose_array_msg(result.ee_path, EE_FRAME)
+    response.blocking_ids = list(result.blocking_ids)
+    response.blocked_by_immovable = result.blocked_by_immovable
     return response
 
 

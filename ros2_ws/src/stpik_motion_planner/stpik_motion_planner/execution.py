@@ -20,6 +20,7 @@ import numpy as np
 from jaco2_description.model import ARM_JOINTS
 from qtree_msgs.msg import ObjectState
 from qtree_msgs.srv import AttachObject
+from qtree_node_support.qos import SERVICE_QOS
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
@@ -81,6 +82,7 @@ class TrajectoryExecution:
         self._attach = node.create_client(
             AttachObject,
             self.endpoints['attach_service'],
+            qos_profile=SERVICE_QOS,
             callback_group=MutuallyExclusiveCallbackGroup(),
         )
 

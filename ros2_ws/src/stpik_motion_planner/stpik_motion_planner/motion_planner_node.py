@@ -28,17 +28,19 @@ Limits and timing of a request:
 from __future__ import annotations
 
 import dataclasses
+import sys
 import threading
 import time
 
-import rclpy
 from qtree_msgs.msg import PlanningEvent, Scene
 from qtree_msgs.srv import RelocateObject
+from qtree_node_support.lifecycle import run_node
+from qtree_node_support.qos import SERVICE_QOS
 from qtree_scene.message import scenario_from_msg
 from qtree_scene.scene import ObjectSpec
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -119,6 +121,7 @@ class MotionPlannerNode(Node):
             RelocateObject,
             '/relocate_object',
             self._on_relocate,
+            qos_profile=SERVICE_QOS,  # a burst of requests is queued, never dropped (#18)
             callback_group=ReentrantCallbackGroup(),
         )
         self.get_logger().info('motion_planner ready: serving /relocate_object')
@@ -241,18 +244,9 @@ class MotionPlannerNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    """Run the node until Ctrl-C."""
-    rclpy.init(args=args)
-    node = MotionPlannerNode()
-    executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
-    executor.add_node(node)
-    try:
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    """Run the node until SIGINT/SIGTERM (exit code 0)."""
+    executor = lambda context: MultiThreadedExecutor(EXECUTOR_THREADS, context=context)  # noqa: E731
+    sys.exit(run_node(MotionPlannerNode, args=args, make_executor=executor))
 
 
 if __name__ == '__main__':
