@@ -28,6 +28,7 @@ from qtree_msgs.msg import Scene
 from qtree_msgs.srv import AttachObject, ResetScene
 from qtree_node_support.lifecycle import run_node
 from qtree_node_support.qos import SERVICE_QOS
+from qtree_node_support.text import clip, quote
 from qtree_scene.scenario import load_scenario
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import InvalidParameterValueException, ParameterUninitializedException
@@ -225,10 +226,10 @@ class Jaco2SimNode(Node):
             return response
         except Exception as err:  # a bad file must not kill the node
             response.success = False
-            response.message = f'{name}: unexpected {type(err).__name__}: {err}'
+            response.message = clip(f'{quote(name)}: unexpected {type(err).__name__}: {err}', 1000)
             self.get_logger().error(f'reset_scene failed: {response.message}')
             return response
-        response.success, response.message = True, f'scenario {self.scenario.name} loaded'
+        response.success, response.message = True, f'scenario {quote(self.scenario.name)} loaded'
         return response
 
     def _on_attach(self, request: AttachObject.Request, response: AttachObject.Response):
@@ -237,15 +238,15 @@ class Jaco2SimNode(Node):
                 distance = self.world.attach(request.object_id, self.robot.ee_pose(self.sim.q))
                 if distance > ATTACH_DISTANCE_WARN:
                     self.get_logger().warning(
-                        f'attached {request.object_id} {distance:.3f} m from the EE'
+                        f'attached {quote(request.object_id)} {distance:.3f} m from the EE'
                     )
-                response.message = f'{request.object_id} attached'
+                response.message = f'{quote(request.object_id)} attached'
             else:
                 status = STATUS_NAMES.get(
                     request.status_after_release, f'code {request.status_after_release}'
                 )
                 self.world.detach(request.object_id, status)
-                response.message = f'{request.object_id} released ({status})'
+                response.message = f'{quote(request.object_id)} released ({status})'
         except (Jaco2SimError, ModelError, ScenarioError) as err:
             response.success, response.message = False, str(err)
             return response

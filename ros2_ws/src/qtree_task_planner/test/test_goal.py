@@ -86,3 +86,9 @@ def test_the_float_fields_are_every_float64_of_the_goal() -> None:
 
     types = RetrieveTarget.Goal.get_fields_and_field_types()
     assert set(FLOAT_FIELDS) == {name for name, kind in types.items() if kind == 'double'}
+
+
+def test_a_huge_policy_is_quoted_short() -> None:
+    with pytest.raises(UnknownPolicyError, match=r'\(10000 characters\)') as err:
+        settings_from_goal(_goal(policy='P' * 10_000))  # was echoed in full (#18)
+    assert len(str(err.value)) < 300
