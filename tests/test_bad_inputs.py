@@ -107,6 +107,7 @@ GOAL_CASES = [
     ('max_episodes negative', {'max_episodes': -5}, 'max_episodes'),
     ('beta zero', {'beta': 0.0}, 'beta'),
     ('beta NaN', {'beta': math.nan}, 'beta'),
+    ('beta inf', {'beta': math.inf}, 'beta'),
     ('steady_episodes zero', {'steady_episodes': 0}, 'steady_episodes'),
     ('feedback_every zero', {'feedback_every': 0}, 'feedback_every'),
     ('feedback_every negative', {'feedback_every': -3}, 'feedback_every'),

@@ -14,6 +14,7 @@ from qtree_msgs.msg import Scene
 from qtree_msgs.srv import AttachObject, ResetScene, SetScene
 from qtree_node_support.lifecycle import run_node
 from qtree_node_support.qos import SERVICE_QOS
+from qtree_node_support.text import quote
 from qtree_scene.message import parse_scene_msg
 from rclpy.exceptions import InvalidParameterValueException, ParameterUninitializedException
 from rclpy.node import Node
@@ -122,22 +123,16 @@ class Jaco2SimNode(Node):
     def _on_reset(self, request: ResetScene.Request, response: ResetScene.Response):
         name = request.scenario or self.scenario.source or self.scenario.name
         change = lambda: self._change(self.core.reset_scene, request.scenario)  # noqa: E731
-        return answer(response, change, 'reset_scene', name, self.get_logger())
+        return answer(response, change, 'reset_scene', quote(name), self.get_logger())
 
     def _on_set_scene(self, request: SetScene.Request, response: SetScene.Response):
         change = lambda: self._change(self.core.set_scene, parse_scene_msg(request.scene))  # noqa: E731
         return answer(response, change, 'set_scene', 'SetScene', self.get_logger())
 
     def _on_attach(self, request: AttachObject.Request, response: AttachObject.Response):
-        def change() -> str:
-            message, warning = self.core.grasp(
-                request.object_id, request.attach, request.status_after_release
-            )
-            if warning:
-                self.get_logger().warning(warning)
-            return self._change(lambda: message)
-
-        return answer(response, change, 'attach_object', request.object_id, self.get_logger())
+        args = (request.object_id, request.attach, request.status_after_release)
+        change = lambda: self._change(self.core.grasp, *args)  # noqa: E731
+        return answer(response, change, 'attach_object', quote(args[0]), self.get_logger())
 
 
 def main(args: list[str] | None = None) -> None:

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 from jaco2_description.model import FINGER_JOINTS, Jaco2Model
+from qtree_node_support.text import clip, quote
 from qtree_scene.message import STATUS_CODES
 from qtree_scene.scenario import load_scenario
 from qtree_scene.scene import Scenario
@@ -32,6 +33,7 @@ from jaco2_sim.exceptions import Jaco2SimError, ModelError, ScenarioError
 from jaco2_sim.integrator import JointIntegrator
 from jaco2_sim.world import World
 
+MAX_MESSAGE_CHARS = 1000  # longest answer message [characters]
 ATTACH_DISTANCE_WARN = 0.25  # attach farther than this from the EE origin is suspicious [m]
 EXPECTED_ERRORS = (Jaco2SimError, ModelError, ScenarioError)
 STATUS_NAMES = {code: name for name, code in STATUS_CODES.items()}  # ObjectState.STATUS_*
@@ -100,12 +102,12 @@ class Simulation:
             self.load(name or self.scenario.source)
         else:  # a scene given by SetScene: back to its initial state
             self.install(self.scenario)
-        return f'scenario {self.scenario.name} loaded'
+        return f'scenario {quote(self.scenario.name)} loaded'
 
     def set_scene(self, scenario: Scenario) -> str:
         """Install a scene given as a message (already validated)."""
         self.install(scenario)
-        return f'scene {scenario.name!r} set ({len(scenario.objects)} objects)'
+        return f'scene {quote(scenario.name)} set ({len(scenario.objects)} objects)'
 
     def step(self) -> bool:
         """One period: the arm moves, the held object follows. True when a trajectory ends."""
@@ -160,13 +162,13 @@ class Simulation:
         distance = self.world.attach(object_id, self.robot.ee_pose(self.sim.q))
         warning = ''
         if distance > ATTACH_DISTANCE_WARN:
-            warning = f'attached {object_id} {distance:.3f} m from the EE'
-        return f'{object_id} attached', warning
+            warning = f'attached {quote(object_id)} {distance:.3f} m from the EE'
+        return f'{quote(object_id)} attached', warning
 
     def release(self, object_id: str, status: str) -> str:
         """Release ``object_id`` with ``status`` (``'relocated'`` or ``'in_clutter'``)."""
         self.world.detach(object_id, status)
-        return f'{object_id} released ({status})'
+        return f'{quote(object_id)} released ({status})'
 
 
 def answer(response: Any, change: Callable[[], str], label: str, prefix: str, logger: Any) -> Any:
@@ -174,18 +176,24 @@ def answer(response: Any, change: Callable[[], str], label: str, prefix: str, lo
 
     Args:
         response: a service response with ``success`` and ``message``.
-        change: the action; returns the success message, raises on a rejected request.
+        change: the action; returns the success message (or ``(message, warning to log)``),
+            raises on a rejected request.
         label: service name for the log (``reset_scene``).
-        prefix: start of the message of an unexpected error (the file, ``SetScene``).
+        prefix: start of the message of an unexpected error (the quoted file, ``SetScene``).
         logger: the node's logger (``warning``, ``error``).
     """
     try:
-        response.success, response.message = True, change()
+        done = change()
+        message, warning = done if isinstance(done, tuple) else (done, '')
+        response.success, response.message = True, message
+        if warning:
+            logger.warning(warning)
     except EXPECTED_ERRORS as err:
-        response.success, response.message = False, str(err)
-        logger.warning(f'{label} rejected: {err}')
+        response.success, response.message = False, clip(str(err), MAX_MESSAGE_CHARS)
+        logger.warning(f'{label} rejected: {response.message}')
     except Exception as err:  # a bad request must not kill the node
         response.success = False
-        response.message = f'{prefix}: unexpected {type(err).__name__}: {err}'
+        unexpected = f'{prefix}: unexpected {type(err).__name__}: {err}'
+        response.message = clip(unexpected, MAX_MESSAGE_CHARS)
         logger.error(f'{label} failed: {response.message}')
     return response

@@ -10,7 +10,8 @@ goal running -> INVALID_GOAL ("busy"); no /scene in time, no /relocate_object se
 timing out or a request rejected by the planner (reason 1xx, e.g. unknown object) ->
 MOTION_PLANNER_UNAVAILABLE, with the statistics learned so far in the result; scene
 without a target in the clutter or no sequence learned -> NO_SOLUTION; cancel -> CANCELED (checked
-once per episode); an execution step failing -> EXECUTION_FAILED.
+once per episode; during the execution the arm stops at once, result ``executed_ids``); an
+execution step failing -> EXECUTION_FAILED.
 """
 
 from __future__ import annotations
@@ -30,7 +31,8 @@ from qtree_task_planner.exceptions import (
 )
 from qtree_task_planner.goal import settings_from_goal
 from qtree_task_planner.messages import feedback_msg, movable_from_scene
-from qtree_task_planner.ros_oracle import RosPlannerOracle, execute_sequence
+from qtree_task_planner.ros_oracle import RosPlannerOracle
+from qtree_task_planner.sequence_execution import CANCELED, FAILED, SequenceExecution
 from qtree_task_planner.training import STOP_CANCELLED, QTreeTrainer
 
 Result = RetrieveTarget.Result
@@ -72,6 +74,8 @@ class GoalContext:
         stopping: set when the node shuts down (ends a training at once).
         publish_stats: ``(stats, policy name)`` → /training_stats.
         publish_tree: ``(tree, episode)`` → /qtree.
+        execution: runs the learned sequence (stops the arm on cancel).
+        oracle: the running goal's planner oracle (its ``retries``), None before training.
     """
 
     scene: Callable[[], Any]
@@ -80,6 +84,8 @@ class GoalContext:
     stopping: threading.Event
     publish_stats: Callable[[Any, str], None]
     publish_tree: Callable[[Any, int], None]
+    execution: SequenceExecution
+    oracle: RosPlannerOracle | None = None
 
 
 def run_goal(goal_handle: Any, ctx: GoalContext) -> tuple[int, str, Any, bool]:
@@ -102,7 +108,7 @@ def run_goal(goal_handle: Any, ctx: GoalContext) -> tuple[int, str, Any, bool]:
     if not ctx.planner.wait_for_service(timeout_sec=ctx.param('planner_wait_s')):
         msg = 'service /relocate_object not available'
         return Result.MOTION_PLANNER_UNAVAILABLE, msg, None, False
-    oracle = RosPlannerOracle(
+    oracle = ctx.oracle = RosPlannerOracle(
         ctx.planner, ctx.param('planner_timeout_s'), ctx.param('scene_wait_s'), ctx.stopping
     )
     trainer = QTreeTrainer(movable, target, oracle, settings.config)
@@ -134,8 +140,10 @@ def run_goal(goal_handle: Any, ctx: GoalContext) -> tuple[int, str, Any, bool]:
     if not settings.execute:
         return Result.SUCCESS, summary, result, False
     timeout_s = ctx.param('execute_timeout_s')
-    error = execute_sequence(ctx.planner, result.sequence, timeout_s, ctx.stopping)
-    if error:
+    status, error = ctx.execution.run(result.sequence, timeout_s, ctx.stopping)
+    if status == CANCELED:
+        return Result.CANCELED, error, result, False
+    if status == FAILED:
         return Result.EXECUTION_FAILED, error, result, False
     return Result.SUCCESS, summary + ', executed', result, True
 

@@ -30,6 +30,7 @@ from qtree_task_planner.goal_run import (
     timeout_descriptor,
 )
 from qtree_task_planner.messages import result_msg, stats_msg, tree_msg
+from qtree_task_planner.sequence_execution import SequenceExecution
 
 LATCHED_QOS = QoSProfile(  # /scene and /qtree: late joiners get the last message
     depth=1,
@@ -60,6 +61,8 @@ class TaskPlannerNode(Node):
         self._planner = self.create_client(
             RelocateObject, '/relocate_object', qos_profile=SERVICE_QOS, callback_group=self._group
         )
+        self._execution = SequenceExecution(self, self._planner)  # stops the arm on cancel
+        self._active = None  # the running goal's handle
         self._goal_context = GoalContext(
             scene=lambda: self._scene,
             planner=self._planner,
@@ -67,13 +70,14 @@ class TaskPlannerNode(Node):
             stopping=self.stopping,
             publish_stats=self._publish_stats,
             publish_tree=self._publish_tree,
+            execution=self._execution,
         )
         self._server = ActionServer(
             self,
             RetrieveTarget,
             '/retrieve_target',
             execute_callback=self._execute,
-            cancel_callback=lambda _: CancelResponse.ACCEPT,
+            cancel_callback=self._on_cancel,
             callback_group=self._group,
             **action_server_qos(),
         )
@@ -88,10 +92,17 @@ class TaskPlannerNode(Node):
     def _publish_tree(self, tree, episode: int) -> None:
         self._tree_pub.publish(tree_msg(tree, episode, self.get_clock().now().to_msg()))
 
+    def _on_cancel(self, goal_handle) -> CancelResponse:
+        if goal_handle is self._active:  # training: per episode; execution: the arm stops now
+            self._execution.cancel()
+        return CancelResponse.ACCEPT
+
     def _execute(self, goal_handle) -> Result:
         if not self._busy.acquire(blocking=False):
             goal_handle.abort()
             return result_msg(None, error_code=Result.INVALID_GOAL, message='busy with a goal')
+        self._active, self._goal_context.oracle = goal_handle, None
+        self._execution.reset()
         try:
             code, message, result, executed = run_goal(goal_handle, self._goal_context)
         except Exception as err:  # a bug must end the goal with a reason, never hang the client
@@ -106,6 +117,9 @@ class TaskPlannerNode(Node):
             self._busy.release()
         self.get_logger().info(f'goal finished: {message}')
         msg = result_msg(result, error_code=code, message=message, executed=executed)
+        msg.executed_ids = list(self._execution.executed)
+        oracle = self._goal_context.oracle
+        msg.planner_retries = oracle.retries if oracle else 0
         ended = end_goal(goal_handle, code, self.stopping)
         if ended:
             self.get_logger().info(ended)

@@ -8,12 +8,19 @@ and attaches and releases the object through the ``attach_service`` (default
 ``/jaco2_sim/attach_object``, a ``qtree_msgs/srv/AttachObject`` server). The three names are
 read-only parameters declared here. It reads the node's ``execution_timeout_s``,
 ``joint_state_timeout_s`` and ``goal_tolerance_rad`` parameters at every segment.
+
+Cancel (#18): ``~/cancel_execution`` (std_srvs/Trigger, e.g. the task planner cancelling its
+goal) stops the arm at once with an empty trajectory on ``trajectory_topic`` (the sim holds its
+position), and the running execution ends with ``EXECUTION_FAILED`` "execution canceled" within
+one 20 ms poll; no further segment is sent (the check and the publication of a segment are
+atomic with the stop).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import threading
 import time
 
 import numpy as np
@@ -26,6 +33,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from stpik_motion_planner.conversions import trajectory_msg
@@ -79,6 +87,16 @@ class TrajectoryExecution:
         self._trajectory_pub = node.create_publisher(
             JointTrajectory, self.endpoints['trajectory_topic'], 10
         )
+        self._canceled = threading.Event()  # set by ~/cancel_execution, cleared by follow()
+        self._running = False
+        self._stop_lock = threading.Lock()  # a segment is sent, or the stop; never both crossed
+        node.create_service(
+            Trigger,
+            '~/cancel_execution',
+            self._on_cancel,
+            qos_profile=SERVICE_QOS,
+            callback_group=MutuallyExclusiveCallbackGroup(),
+        )
         self._attach = node.create_client(
             AttachObject,
             self.endpoints['attach_service'],
@@ -97,6 +115,9 @@ class TrajectoryExecution:
             ``result`` when executed, else a copy with ``EXECUTION_FAILED`` and why.
         """
         self.q, self.state_time = None, -math.inf
+        with self._stop_lock:
+            self._canceled.clear()
+            self._running = True
         states = self._node.create_subscription(
             JointState,
             self.endpoints['joint_state_topic'],
@@ -107,7 +128,19 @@ class TrajectoryExecution:
         try:
             return self._follow_segments(result, object_id)
         finally:
+            self._running = False
             self._node.destroy_subscription(states)
+
+    def _on_cancel(self, _request: Trigger.Request, response: Trigger.Response):
+        """Stop the arm now (empty /joint_trajectory) and end the running execution."""
+        with self._stop_lock:
+            running = self._running
+            self._canceled.set()
+            self._trajectory_pub.publish(JointTrajectory(joint_names=list(ARM_JOINTS)))
+        response.success = True
+        response.message = 'execution canceled, arm stopped' if running else 'arm stopped'
+        self._node.get_logger().info(f'cancel_execution: {response.message}')
+        return response
 
     def _on_joint_states(self, msg: JointState) -> None:
         index = {n: i for i, n in enumerate(msg.name)}
@@ -120,9 +153,10 @@ class TrajectoryExecution:
         steps = [(0, g, True), (g, r, False), (r, len(result.times) - 1, None)]
         for start, end, attach in steps:
             times = result.times[start : end + 1] - result.times[start]
-            self._trajectory_pub.publish(
-                trajectory_msg(times, result.joint_trajectory[start : end + 1])
-            )
+            segment = trajectory_msg(times, result.joint_trajectory[start : end + 1])
+            with self._stop_lock:
+                if not self._canceled.is_set():
+                    self._trajectory_pub.publish(segment)
             failure = self._reach(result.joint_trajectory[end], times[-1])
             if failure:
                 return dataclasses.replace(
@@ -131,7 +165,11 @@ class TrajectoryExecution:
                     reason=Reason.EXECUTION_FAILED,
                     message=f'the sim did not reach sample {end}: {failure}',
                 )
-            if attach is not None and not self._call_attach(object_id, attach):
+            if (
+                attach is not None
+                and not self._canceled.is_set()
+                and not self._call_attach(object_id, attach)
+            ):
                 return dataclasses.replace(
                     result,
                     feasible=False,
@@ -153,6 +191,8 @@ class TrajectoryExecution:
         start = time.monotonic()
         while True:
             now = time.monotonic()
+            if self._canceled.is_set():
+                return 'execution canceled'
             if self.q is not None and np.max(np.abs(self.q - q_goal)) < tolerance:
                 return ''
             silent = now - max(self.state_time, start)

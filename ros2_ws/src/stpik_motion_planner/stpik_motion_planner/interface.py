@@ -32,7 +32,7 @@ EXTRA = {  # name: (default, low, high, description)
         10.0,
         0.0,
         600.0,
-        'longest wait of a request for the busy planner before TIMEOUT; the planning itself '
+        'longest wait of a request for the busy planner before PLANNER_BUSY; the planning itself '
         'is bounded by time_limit_s [s]',
     ),
 }

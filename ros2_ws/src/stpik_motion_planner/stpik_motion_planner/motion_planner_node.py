@@ -15,13 +15,14 @@ from qtree_msgs.msg import PlanningEvent, Scene
 from qtree_msgs.srv import RelocateObject
 from qtree_node_support.lifecycle import run_node
 from qtree_node_support.qos import SERVICE_QOS
+from qtree_node_support.text import clip
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 
 from stpik_motion_planner import interface as api
-from stpik_motion_planner.conversions import clip, fill_relocate_response, planning_event_msg
+from stpik_motion_planner.conversions import fill_relocate_response, planning_event_msg
 from stpik_motion_planner.execution import TrajectoryExecution
 from stpik_motion_planner.scene_checks import format_id, format_ids
 from stpik_motion_planner.service import MAX_WAITING_PLANS, PlannerService

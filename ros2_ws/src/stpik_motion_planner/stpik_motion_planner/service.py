@@ -12,9 +12,9 @@ Limits and timing of a request:
   characters; the event carries at most 256 ids of at most 256 characters.
 - Bad requests, ``NO_SCENE`` and cache hits are answered at once, without waiting for the
   planner. Checks that need planning run one at a time (one STPIK state per planner); a request
-  waits at most ``request_timeout_s`` for its turn, then ``TIMEOUT``. ``time_limit_s`` bounds
+  waits at most ``request_timeout_s`` for its turn, then ``PLANNER_BUSY``. ``time_limit_s`` bounds
   the planning itself, so an answer takes at most about ``request_timeout_s + time_limit_s``.
-  At most :data:`MAX_WAITING_PLANS` requests wait or plan at once; more get ``TIMEOUT`` (busy) at
+  At most :data:`MAX_WAITING_PLANS` requests wait or plan at once; more get ``PLANNER_BUSY`` at
   once, so the executor (``EXECUTOR_THREADS`` threads) always has threads for /joint_states,
   /scene and the other requests.
 - One execution at a time (another gets ``EXECUTION_FAILED``); /scene messages received
@@ -119,12 +119,12 @@ class PlannerService:
             return answer
         if not self._waiting.acquire(blocking=False):
             busy = f'planner busy: {MAX_WAITING_PLANS} requests are already waiting for it'
-            return PlanResult(False, Reason.TIMEOUT, busy)
+            return PlanResult(False, Reason.PLANNER_BUSY, busy)
         try:
             remaining_s = max(0.0, received + wait_s - time.monotonic())
             if not self._plan_lock.acquire(timeout=remaining_s):
                 busy = f'planner busy: not free within request_timeout_s={wait_s:.1f} s'
-                return PlanResult(False, Reason.TIMEOUT, busy)
+                return PlanResult(False, Reason.PLANNER_BUSY, busy)
             try:
                 planner = self._planner  # the scene may have changed while waiting
                 if planner is None:
