@@ -14,9 +14,9 @@ planner's failure margins + ``activation_slack_m`` and the joint-limit task
 
 and the posture task's is Δq_d + K·dt (q_d(t) − q_m) with Δq_d = q_d(t + dt) − q_d(t), so the
 redundancy follows the plan (also through joint-space transits near singularities). The joint
-step is integrated on the streamed reference, q_r ← q_r + q̇ dt, so a constant actuator offset is rejected (the
-reference drifts until the measured EE is on the path). The reference stays within the joint
-limits and within ``max_lead_rad`` of q_m (anti wind-up).
+step is integrated on the streamed reference, q_r ← q_r + q̇ dt, so a constant actuator offset
+is rejected (the reference drifts until the measured EE is on the path). The reference stays
+within the joint limits and within ``max_lead_rad`` of q_m (anti wind-up).
 
 It stops with :class:`ExecutionStopped` (and a message naming why) when the measured state is
 unusable, a set-based task cannot hold its set (a measured distance at or below the planner's
@@ -381,7 +381,8 @@ class ClosedLoopController:
                 raise ExecutionStopped(
                     'obstacles',
                     f'obstacle task cannot hold its set: {p.name_a} '
-                    f'{p.distance * 1e3:.1f} mm from {p.name_b!r} (margin {m.obstacle_min_distance_m * 1e3:.1f} mm)',
+                    f'{p.distance * 1e3:.1f} mm from {p.name_b!r} '
+                    f'(margin {m.obstacle_min_distance_m * 1e3:.1f} mm)',
                 )
 
     def _lost_message(
