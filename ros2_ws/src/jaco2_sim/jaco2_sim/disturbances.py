@@ -122,3 +122,93 @@ class MeasurementNoise:
         if self.sigma == 0.0:
             return np.asarray(q, dtype=float)
         return np.asarray(q, dtype=float) + self._rng.normal(0.0, self.sigma, len(q))
+
+
+# ROS parameter of the sim node -> Disturbances field.
+PARAMETER_FIELDS = {
+    'joint_offset_rad': 'joint_offset_rad',
+    'command_latency_s': 'latency_s',
+    'velocity_limit_scale': 'velocity_limit_scale',
+    'measurement_noise_rad': 'noise_rad',
+    'noise_seed': 'noise_seed',
+}
+
+
+def from_parameters(values: dict[str, Any]) -> Disturbances:
+    """:class:`Disturbances` from sim-node parameter values (names of :data:`PARAMETER_FIELDS`).
+
+    Raises:
+        DisturbanceError: a value is NaN, negative, out of range or of the wrong type; the
+            message names the parameter.
+    """
+    fields = {}
+    for parameter, name in PARAMETER_FIELDS.items():
+        if parameter in values:
+            value = values[parameter]
+            fields[name] = tuple(value) if name == 'joint_offset_rad' else value
+    try:
+        return Disturbances(**fields)
+    except DisturbanceError as err:
+        text = str(err)
+        for parameter, name in PARAMETER_FIELDS.items():
+            if text.startswith(f'{name}:'):
+                text = parameter + text[len(name) :]
+        raise DisturbanceError(text) from None
+
+
+class DisturbedDrive:
+    """The integrator behind the disturbances: commands go through the latency queue, the offset
+    and velocity-limit scale act in the integrator, the measurement is noisy.
+
+    Attributes:
+        sim: the integrator (its ``q`` is the true state).
+        disturbances: the values in force.
+    """
+
+    def __init__(self, sim: Any, disturbances: Disturbances | None = None) -> None:
+        self.sim = sim
+        self.delay = CommandDelay()
+        self.noise = MeasurementNoise()
+        self.disturbances = Disturbances()
+        self.configure(disturbances or Disturbances())
+
+    def configure(self, disturbances: Disturbances) -> None:
+        """Put ``disturbances`` in force (pending commands keep their due times)."""
+        self.disturbances = disturbances
+        self.sim.disturb(disturbances.joint_offset_rad, disturbances.velocity_limit_scale)
+        self.delay.latency_s = disturbances.latency_s
+        self.noise = MeasurementNoise(disturbances.noise_rad, disturbances.noise_seed)
+
+    def command(self, kind: str, *args: Any) -> bool:
+        """Apply now, or queue when there is latency: ``('trajectory', names, times, positions,
+        velocities)`` or ``('point', names, positions)``.
+
+        Returns:
+            True when applied now and some positions were clamped to the joint limits.
+
+        Raises:
+            TrajectoryError: (applied now) a malformed command; the current motion is kept.
+        """
+        if self.delay.latency_s > 0.0:
+            self.delay.push(self.sim.time, (kind, args))
+            return False
+        return self._apply(kind, args)
+
+    def apply_due(self) -> list[str]:
+        """Apply the queued commands that are due; the errors of the malformed ones."""
+        errors = []
+        for kind, args in self.delay.due(self.sim.time):
+            try:
+                self._apply(kind, args)
+            except Exception as err:  # reported; the sim keeps running
+                errors.append(str(err))
+        return errors
+
+    def measured(self) -> np.ndarray:
+        """The measured arm angles [rad] (7,): true state + noise."""
+        return self.noise.measure(self.sim.q)
+
+    def _apply(self, kind: str, args: tuple) -> bool:
+        if kind == 'point':
+            return self.sim.set_point(*args)
+        return self.sim.set_reference(*args)

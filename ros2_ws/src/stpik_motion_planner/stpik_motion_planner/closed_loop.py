@@ -16,7 +16,9 @@ and the posture task's is Δq_d + K·dt (q_d(t) − q_m) with Δq_d = q_d(t + dt
 redundancy follows the plan (also through joint-space transits near singularities). The joint
 step is integrated on the streamed reference, q_r ← q_r + q̇ dt, so a constant actuator offset
 is rejected (the reference drifts until the measured EE is on the path). The reference stays
-within the joint limits and within ``max_lead_rad`` of q_m (anti wind-up).
+within the joint limits and within ``max_lead_rad`` of q_m (anti wind-up). When the arm lags
+(error above ``slow_down_error_m``) the reference time slows down, and stops halfway to
+``max_tracking_error_m``, so a slow or late arm follows the path instead of cutting corners.
 
 It stops with :class:`ExecutionStopped` (and a message naming why) when the measured state is
 unusable, a set-based task cannot hold its set (a measured distance at or below the planner's
@@ -45,6 +47,10 @@ from stpik_motion_planner.tasks import EePoseTask, Kinematics, PostureTask, Task
 from stpik_motion_planner.tasks.ee_pose_task import pose_error
 
 SETTLE_SMOOTHING = 0.2  # weight of the newest error in the settling average [-]
+# The carried object's collision body is this much shorter at each end [m]: the plan sets it
+# down ON the table (the planner shortens it by its margin + 2 mm), so the executor leaves room
+# for a few mm of overshoot there; sideways margins are unchanged.
+SETTLE_M = 0.02
 
 
 class ExecutionStopped(MotionPlannerError):  # noqa: N818
@@ -250,6 +256,7 @@ class ClosedLoopController:
         self._t = self._t_end = 0.0
         self._settle_s = 0.0
         self._settle_error = np.inf
+        self._stalled_s = 0.0
 
     def set_scene(self, scene: SceneWorld) -> None:
         """Replace the scene checked by the obstacle task (the live scene)."""
@@ -258,11 +265,7 @@ class ClosedLoopController:
     def attach(self, obj: ObjectSpec, world_obj: pin.SE3, q_meas: np.ndarray) -> None:
         """Carry ``obj`` (pose ``world_obj``) as grasped at the measured joints ``q_meas``."""
         world_ee = self.stpik.kinematics(np.asarray(q_meas, dtype=float), SceneWorld([]))
-        self.stpik.bodies.attach(
-            obj,
-            world_ee.world_ee.actInv(world_obj),
-            settle_m=self.margins.obstacle_min_distance_m + 0.002,
-        )
+        self.stpik.bodies.attach(obj, world_ee.world_ee.actInv(world_obj), settle_m=SETTLE_M)
 
     def detach(self) -> None:
         """Stop carrying the attached object."""
@@ -275,6 +278,7 @@ class ClosedLoopController:
         self.q_ref = np.array(q_ref, dtype=float)
         self.phase = 'tracking'
         self._settle_s, self._settle_error = 0.0, np.inf
+        self._stalled_s = 0.0
 
     def step(self, q_meas: np.ndarray) -> ControlTick:
         """One control tick from the measured joints ``q_meas`` [rad] (7,).
@@ -293,15 +297,15 @@ class ClosedLoopController:
         q = np.asarray(q_meas, dtype=float)
         if q.shape != (7,) or not np.all(np.isfinite(q)):
             raise ExecutionStopped('joint_state', f'measured joints must be 7 finite angles: {q}')
-        dt = c.period
-        t_next = min(self._t + dt, self._t_end) if self.phase == 'tracking' else self._t_end
         ee_ref = self._motion.ee_at(self._t)
-        ee_next = self._motion.ee_at(t_next)
         k = self.stpik.kinematics(q, self.scene)
         self._check_sets(k)
         error = pose_error(ee_ref, k.world_ee)
         error_m, error_rad = float(np.linalg.norm(error[:3])), float(np.linalg.norm(error[3:]))
-        active: list[str] = []
+        rate = self._time_scale(error_m)
+        dt = c.period * rate
+        t_next = min(self._t + dt, self._t_end) if self.phase == 'tracking' else self._t_end
+        ee_next = self._motion.ee_at(t_next)
         self.ee_task.target = ee_ref
         self.ee_task.feedforward = pose_error(ee_next, ee_ref)
         q_plan = self._motion.joints_at(self._t)
@@ -310,6 +314,13 @@ class ClosedLoopController:
         dq, active = self.stpik.solve(k)
         if error_m > c.max_tracking_error_m or error_rad > c.max_tracking_error_rad:
             raise ExecutionStopped('tracking', self._lost_message(k, error_m, error_rad, active))
+        self._stalled_s = self._stalled_s + c.period if rate == 0.0 else 0.0
+        if self._stalled_s > c.settle_timeout_s:
+            raise ExecutionStopped(
+                'tracking',
+                f'reference stalled for {self._stalled_s:.1f} s: '
+                + self._lost_message(k, error_m, error_rad, active),
+            )
         largest = float(np.max(np.abs(dq) / self.step_limit))
         if largest > 1.0:  # never ask for more than the velocity limits
             dq /= largest
@@ -333,6 +344,15 @@ class ClosedLoopController:
             time.thread_time() - cpu_start,
             t_next,
         )
+
+    def _time_scale(self, error_m: float) -> float:
+        """Rate of the reference time [-]: 1 up to ``slow_down_error_m``, 0 halfway to the
+        largest error (the arm lags: slow velocity limits, latency, a loaded machine)."""
+        c = self.config
+        span = 0.5 * (c.max_tracking_error_m - c.slow_down_error_m)
+        if error_m <= c.slow_down_error_m or span <= 0.0:
+            return 1.0
+        return max(0.0, 1.0 - (error_m - c.slow_down_error_m) / span)
 
     def _advance(self, t_next: float, error_m: float, error_rad: float) -> None:
         c = self.config
@@ -390,7 +410,7 @@ class ClosedLoopController:
     ) -> str:
         c = self.config
         text = (
-            f'tracking error {error_m * 1e3:.1f} mm / {error_rad:.3f} rad beyond '
+            f'EE error {error_m * 1e3:.1f} mm / {error_rad:.3f} rad beyond '
             f'max_tracking_error_m={c.max_tracking_error_m * 1e3:.0f} mm / '
             f'max_tracking_error_rad={c.max_tracking_error_rad:g} rad'
         )

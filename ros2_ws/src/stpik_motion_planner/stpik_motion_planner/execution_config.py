@@ -22,9 +22,20 @@ EXECUTION_RANGES: dict[str, tuple[float, float, str]] = {
     'execution_posture_gain': (0.0, 0.5, 'posture (planned joints) gain K·dt per tick [-]'),
     'max_tracking_error_m': (0.001, 0.5, 'EE position error that stops the execution [m]'),
     'max_tracking_error_rad': (0.01, 1.0, 'EE orientation error that stops it [rad]'),
+    'slow_down_error_m': (
+        0.0,
+        0.5,
+        'EE error above which the reference slows down; it stops '
+        'halfway to max_tracking_error_m [m]',
+    ),
     'settle_tolerance_m': (1e-4, 0.05, 'EE position error at which a segment is done [m]'),
     'settle_tolerance_rad': (1e-3, 0.5, 'EE orientation error at which it is done [rad]'),
-    'settle_timeout_s': (0.01, 60.0, 'longest settling at the end of a segment [s]'),
+    'settle_timeout_s': (
+        0.01,
+        60.0,
+        'longest settling at the end of a segment, or stall of the '
+        'reference, before the execution stops [s]',
+    ),
     'max_lead_rad': (0.01, 1.0, 'largest reference lead over the measured joints [rad]'),
     'activation_slack_m': (
         0.0,
@@ -56,6 +67,7 @@ class ExecutionConfig:
     execution_posture_gain: float = 0.05
     max_tracking_error_m: float = 0.03
     max_tracking_error_rad: float = 0.3
+    slow_down_error_m: float = 0.005
     settle_tolerance_m: float = 0.002
     settle_tolerance_rad: float = 0.02
     settle_timeout_s: float = 3.0
