@@ -5,10 +5,12 @@ and the :class:`~stpik_motion_planner.execution_config.ExecutionConfig` paramete
 ``open_loop`` it behaves as :class:`~stpik_motion_planner.execution.TrajectoryExecution` (whole
 segments on ``/joint_trajectory``). In ``closed_loop`` a timer at ``control_rate_hz``, in its own
 callback group, runs one :class:`~stpik_motion_planner.closed_loop.ClosedLoopController` step
-from the latest ``/joint_states`` and the live ``/scene``, streams the joint reference as
-``sensor_msgs/JointState`` on ``command_topic`` (default ``/joint_command``) and publishes a
-``qtree_msgs/TrackingState`` on ``/motion_planner/tracking``. The service thread only waits for
-each segment's end and attaches / releases the object in between.
+from each new ``/joint_states`` (a tick without a new measurement does nothing, so a starved
+subscription never makes the loop integrate on a stale state) and the live ``/scene``, streams
+the joint reference as ``sensor_msgs/JointState`` on ``command_topic`` (default
+``/joint_command``) and publishes a ``qtree_msgs/TrackingState`` on
+``/motion_planner/tracking``. The service thread only waits for each segment's end and attaches /
+releases the object in between.
 
 On a stop (tracking lost, a set-based task that cannot hold, a joint state with missing or extra
 joints, no joint state for ``joint_state_timeout_s``) the arm is commanded to hold its last
@@ -18,6 +20,7 @@ measured position and the relocation is answered ``EXECUTION_FAILED`` with the r
 from __future__ import annotations
 
 import dataclasses
+import math
 import threading
 import time
 
@@ -83,6 +86,8 @@ class Execution(TrajectoryExecution):
         self._scene_dirty = False
         self._object_id = ''
         self._removed: set[str] = set()
+        self._last_state_time = -math.inf  # /joint_states time of the last control step [s]
+        self._started = -math.inf
         self._stopped = ''
         self._state_error = ''
 
@@ -155,6 +160,7 @@ class Execution(TrajectoryExecution):
                 self.robot, self._live_scene(), planner_config, config
             )
             self._scene_dirty = False
+            self._last_state_time, self._started = -math.inf, time.monotonic()
         motion = PlannedMotion(result.times, result.joint_trajectory, self.robot)
         timer = node.create_timer(config.period, self._on_tick, callback_group=self._timer_group)
         try:
@@ -204,16 +210,18 @@ class Execution(TrajectoryExecution):
             if controller is None or self._stopped or controller.phase in ('done', 'idle'):
                 return
             silence_s = self._node.get_parameter('joint_state_timeout_s').value
-            silent = time.monotonic() - self.state_time
+            silent = time.monotonic() - max(self.state_time, self._started)
             if self._state_error:
                 self._stop_locked(f'bad /joint_states: {self._state_error}')
                 return
-            if silent > silence_s:
-                self._stop_locked(
-                    f'the simulator stopped publishing /joint_states (none for {silent:.1f} s, '
-                    f'joint_state_timeout_s={silence_s:.1f})'
-                )
+            if self.state_time <= self._last_state_time:  # no new measurement: wait for it
+                if silent > silence_s:
+                    self._stop_locked(
+                        f'the simulator stopped publishing /joint_states (none for '
+                        f'{silent:.1f} s, joint_state_timeout_s={silence_s:.1f})'
+                    )
                 return
+            self._last_state_time = self.state_time
             try:
                 if self._scene_dirty:
                     controller.set_scene(self._live_scene())

@@ -65,7 +65,7 @@ class ExecutionConfig:
     tracking_gain: float = 0.15
     execution_set_gain: float = 0.15
     execution_posture_gain: float = 0.05
-    max_tracking_error_m: float = 0.03
+    max_tracking_error_m: float = 0.05
     max_tracking_error_rad: float = 0.3
     slow_down_error_m: float = 0.005
     settle_tolerance_m: float = 0.002
