@@ -7,6 +7,7 @@ import math
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from jaco2_description.model import ARM_JOINTS
 from qtree_msgs.msg import ObjectState, Scene, TrackingState
@@ -14,6 +15,7 @@ from qtree_msgs.srv import RelocateObject, ResetScene
 from qtree_scene.scenario import load_scenario
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
+from shape_msgs.msg import SolidPrimitive
 from stpik_motion_planner.closed_loop import PlannedMotion
 from stpik_motion_planner.planner import MotionPlanner
 
@@ -34,9 +36,7 @@ def plan():
     obj = load_scenario('s1').object('T')
     grasp = motion.ee_of(result.joint_trajectory[result.grasp_index])
     release = motion.ee_of(result.joint_trajectory[result.release_index])
-    start = grasp.actInv(
-        __import__('pinocchio').SE3(np.eye(3), np.asarray(obj.position, dtype=float))
-    )
+    start = grasp.actInv(pin.SE3(np.eye(3), np.asarray(obj.position, dtype=float)))
     return result, motion, (release * start).translation
 
 
@@ -131,14 +131,13 @@ def test_object_moved_onto_the_path_stops_the_arm_with_the_reason(launch, ros_no
     intruder = ObjectState(
         id='intruder',
         role=ObjectState.ROLE_OBSTACLE,
-        shape=ObjectState.SHAPE_BOX,
+        shape=SolidPrimitive(type=SolidPrimitive.BOX, dimensions=[0.05, 0.05, 0.05]),
         status=ObjectState.STATUS_IN_CLUTTER,
     )
     intruder.pose.position.x, intruder.pose.position.y, intruder.pose.position.z = (
         float(v) for v in ahead
     )
     intruder.pose.orientation.w = 1.0
-    intruder.box_size.x = intruder.box_size.y = intruder.box_size.z = 0.05
     scene.objects.append(intruder)
     publisher = ros_node.create_publisher(Scene, '/scene', LATCHED)
     publisher.publish(scene)

@@ -29,6 +29,7 @@ import pinocchio as pin
 from geometry_msgs.msg import Pose
 from jaco2_description.model import ARM_JOINTS, Jaco2Model
 from qtree_msgs.msg import ObjectState, Scene, TrackingState
+from qtree_scene.message import scenario_from_msg
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
@@ -44,7 +45,7 @@ from stpik_motion_planner.closed_loop import (
 )
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import RANGES, PlannerConfig
-from stpik_motion_planner.conversions import range_descriptor, scenario_from_msg
+from stpik_motion_planner.conversions import range_descriptor
 from stpik_motion_planner.exceptions import InvalidConfig
 from stpik_motion_planner.execution import TrajectoryExecution
 from stpik_motion_planner.execution_config import (
