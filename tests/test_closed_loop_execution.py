@@ -147,7 +147,10 @@ def test_object_moved_onto_the_path_stops_the_arm_with_the_reason(launch, ros_no
     assert not answer.feasible
     assert answer.reason == RelocateObject.Response.EXECUTION_FAILED
     assert 'intruder' in answer.message
-    assert any(t.phase == 'stopped' and 'intruder' in t.message for t in seen['tracking'])
+    assert ros_node.spin_until(
+        lambda: any(t.phase == 'stopped' and 'intruder' in t.message for t in seen['tracking']),
+        5.0,
+    )
     # The arm holds where it stopped.
     assert ros_node.spin_until(lambda: len(states) > 10, 5.0)
     held = states[-1]
