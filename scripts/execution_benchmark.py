@@ -29,10 +29,11 @@ from stpik_motion_planner.closed_loop import (
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.execution_config import ExecutionConfig
+from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import PlanResult
 from stpik_motion_planner.stpik import Stpik
 
-CLEARANCE_RANGE_M = 0.2  # clearances are measured exactly up to this distance [m]
+CLEARANCE_RANGE_M = 0.05  # clearances are measured exactly up to this distance [m]
 SETTLE_EXTRA_S = 10.0  # simulated time allowed beyond the plan's duration [s]
 DISTURBANCES: dict[str, Disturbances] = {
     'none': Disturbances(),
@@ -232,3 +233,65 @@ def summary(mode: str, disturbance: str, label: str, run: Execution) -> dict:
 
 def _round(value: float) -> float | None:
     return None if not math.isfinite(value) else round(value, 2)
+
+
+def optimal_relocations(scenario: Scenario, planner: MotionPlanner) -> list[tuple[list[str], str]]:
+    """(relocated before, object) of each relocation of the exact optimal sequence."""
+    from qtree_task_planner.exact import solve_exact
+    from qtree_task_planner.oracle import MotionPlannerOracle
+
+    oracle = MotionPlannerOracle(scenario, planner=planner)
+    obstacles = tuple(o.id for o in scenario.obstacles)
+    solution = solve_exact(obstacles, scenario.target.id, oracle)
+    order = list(solution.sequence)
+    return [(order[:i], object_id) for i, object_id in enumerate(order)]
+
+
+def aggregate(runs: list[dict]) -> list[dict]:
+    """One ``rows[]`` object per (mode, disturbance) over its relocations (worst cases)."""
+    out = []
+    keys = sorted({(r['mode'], r['disturbance']) for r in runs}, key=_row_order)
+    for mode, disturbance in keys:
+        group = [r for r in runs if (r['mode'], r['disturbance']) == (mode, disturbance)]
+        done = [r for r in group if r['completed']]
+
+        def values(key: str, rows: list[dict] = group) -> list[float]:
+            return [r[key] for r in rows if r[key] is not None]
+
+        rms = values('rms_error_mm')
+        ticks = [r['ticks'] for r in group if r['rms_error_mm'] is not None]
+        overall_rms = math.sqrt(
+            sum(v**2 * n for v, n in zip(rms, ticks, strict=True)) / sum(ticks)
+        )
+        out.append(
+            {
+                'mode': mode,
+                'disturbance': disturbance,
+                'relocations': len(group),
+                'completed': len(done),
+                'rms_error_mm': round(overall_rms, 2),
+                'max_error_mm': max(values('max_error_mm'), default=None),
+                'placement_error_mm': max(values('placement_error_mm', done), default=None),
+                'mean_placement_error_mm': _mean(values('placement_error_mm', done)),
+                'min_clearance_mm': min(values('min_clearance_mm'), default=None),
+                'time_to_complete_s': round(sum(values('time_to_complete_s', done)), 2),
+                'step_median_us': _median(values('step_median_us')),
+                'step_p99_us': max(values('step_p99_us'), default=None),
+                'step_cpu_p99_us': max(values('step_cpu_p99_us'), default=None),
+                'failures': [r['failure'] for r in group if r['failure']][:3],
+            }
+        )
+    return out
+
+
+def _row_order(key: tuple[str, str]) -> tuple[int, int]:
+    names = list(DISTURBANCES)
+    return (names.index(key[1]) if key[1] in names else 99, key[0] != 'open_loop')
+
+
+def _mean(values: list[float]) -> float | None:
+    return round(float(np.mean(values)), 2) if values else None
+
+
+def _median(values: list[float]) -> float | None:
+    return round(float(np.median(values)), 2) if values else None
