@@ -119,6 +119,7 @@ class PlannedMotion:
         self._model = robot.model
         self._data = robot.model.createData()
         self._frame = robot.model.getFrameId(EE_FRAME)
+        self._cache: list[tuple[float, pin.SE3]] = [(np.nan, pin.SE3.Identity())] * 2
 
     def joints_at(self, t: float) -> np.ndarray:
         """q_d(t) [rad] (7,), held at the ends."""
@@ -132,8 +133,16 @@ class PlannedMotion:
         return (1 - s) * self.joints[k] + s * self.joints[k + 1]
 
     def ee_at(self, t: float) -> pin.SE3:
-        """x_d(t): the EE pose (world frame) at the planned joints of time ``t`` [s]."""
-        return self.ee_of(self.joints_at(t))
+        """x_d(t): the EE pose (world frame) at the planned joints of time ``t`` [s].
+
+        The last two answers are kept: a control tick asks for x_d(t + dt), the next for x_d(t).
+        """
+        for cached_t, pose in self._cache:
+            if cached_t == t:
+                return pose
+        pose = self.ee_of(self.joints_at(t))
+        self._cache = [self._cache[-1], (t, pose)]
+        return pose
 
     def ee_of(self, q: np.ndarray) -> pin.SE3:
         """EE pose (world frame) at joint angles ``q`` [rad] (7,)."""
