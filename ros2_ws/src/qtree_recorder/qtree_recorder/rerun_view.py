@@ -54,7 +54,7 @@ REASONS = {
 TOPICS = ('/robot_description', '/joint_states', '/scene', '/motion_planner/events', '/qtree',
           '/training_stats', '/motion_planner/tracking')  # fmt: skip
 TRACK_COLORS = {'reference': (120, 120, 130), 'actual': (40, 180, 70)}
-TRACK_EVERY = 10  # redraw the reference / actual EE paths every this many ticks [-]
+TRACK_EVERY = 50  # log the reference / actual EE paths in pieces of this many ticks [-]
 
 F = TypeVar('F', bound=Callable[..., Any])
 
@@ -113,7 +113,7 @@ class RunView:
         self._urdf: rr.urdf.UrdfTree | None = None
         self._objects: set[str] = set()
         self._tmpdir: tempfile.TemporaryDirectory[str] | None = None
-        self._track: dict[str, list] = {'id': [''], 'reference': [], 'actual': []}
+        self._track: dict[str, list] = {'id': [''], 'reference': [], 'actual': [], 'chunk': [0]}
         self.rec = rr.RecordingStream(application_id, recording_id=recording_id)
         self.rec.set_log_time_enabled(False)  # wall time of logging: meaningless in a replay
         blueprint = bp.default_blueprint()
@@ -358,19 +358,28 @@ class RunView:
             return
         track = self._track
         if track['id'][0] != object_id:
-            track['id'][0], track['reference'], track['actual'] = object_id, [], []
+            track['id'][0], track['reference'], track['actual'], track['chunk'] = (
+                object_id,
+                [],
+                [],
+                [0],
+            )
         track['reference'].append(np.asarray(reference, dtype=float)[:3])
         track['actual'].append(np.asarray(actual, dtype=float)[:3])
         self.rec.log(f'{bp.TRACKING_ENTITY}/error_mm', rr.Scalars(float(error_m) * 1e3))
-        if len(track['actual']) % TRACK_EVERY != 1 and phase != 'done':
+        if len(track['actual']) < TRACK_EVERY and phase != 'done':
             return
+        # Each piece of path is logged once, to its own entity (the data grows linearly).
+        chunk = track['chunk'][0]
         for name in ('reference', 'actual'):
             self.rec.log(
-                f'{bp.TRACKING_ENTITY}/{name}',
+                f'{bp.TRACKING_ENTITY}/{object_id}/{name}/{chunk:04d}',
                 rr.LineStrips3D([np.array(track[name])], colors=[TRACK_COLORS[name]],
-                                radii=[0.003], labels=[f'{object_id} {name}']),
+                                radii=[0.003]),
                 rr.CoordinateFrame(bp.WORLD_FRAME),
             )  # fmt: skip
+            track[name] = track[name][-1:]  # the next piece starts where this one ends
+        track['chunk'][0] = chunk + 1
 
     @_guarded
     def on_message(self, topic: str, msg: Any, t_ns: int) -> bool:

@@ -164,19 +164,26 @@ def test_tracking_shows_reference_and_actual_paths_and_the_error(tmp_path: Path)
 
     rrd = tmp_path / 'tracking.rrd'
     view = RunView(mode='save', rrd_path=rrd)
-    for k in range(25):
-        msg = Ns(object_id='O2', phase='tracking' if k < 24 else 'done', message='',
+    for k in range(60):
+        msg = Ns(object_id='O2', phase='tracking' if k < 59 else 'done', message='',
                  ee_reference=point(0.3 + 0.01 * k, 0.0, 0.2),
                  ee_measured=point(0.3 + 0.01 * k, 0.002, 0.2), error_m=0.002)  # fmt: skip
         assert view.on_message('/motion_planner/tracking', msg, T_NS + k * 10_000_000)
     stop = Ns(object_id='O2', phase='stopped', message='closed loop stopped: intruder',
               ee_reference=point(0, 0, 0), ee_measured=point(0, 0, 0), error_m=0.0)  # fmt: skip
-    view.on_message('/motion_planner/tracking', stop, T_NS + 300_000_000)
+    view.on_message('/motion_planner/tracking', stop, T_NS + 700_000_000)
     view.close()
     assert view.error_count == 0
     entities = FX.rrd_entities(rrd)
-    assert {'/tracking/reference', '/tracking/actual', '/tracking/error_mm'} <= entities
+    pieces = {
+        '/tracking/O2/reference/0000',
+        '/tracking/O2/actual/0000',
+        '/tracking/O2/actual/0001',
+    }
+    assert pieces | {'/tracking/error_mm'} <= entities
     errors = FX.rrd_column(rrd, '/tracking/error_mm', 'Scalars:scalars')
-    assert len(errors) == 25 and abs(errors[0][0] - 2.0) < 1e-9
-    strips = FX.rrd_column(rrd, '/tracking/actual', 'LineStrips3D:strips')
-    assert len(strips[-1][0]) == 25  # the last redraw holds every tick
+    assert len(errors) == 60 and abs(errors[0][0] - 2.0) < 1e-9
+    first = FX.rrd_column(rrd, '/tracking/O2/actual/0000', 'LineStrips3D:strips')[0][0]
+    second = FX.rrd_column(rrd, '/tracking/O2/actual/0001', 'LineStrips3D:strips')[0][0]
+    assert len(first) == 50 and len(second) == 11  # pieces join: 50 + 10 new ticks + 1 shared
+    assert first[-1] == second[0]
