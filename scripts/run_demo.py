@@ -62,6 +62,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         '--no-execute', action='store_true', help='train only; do not move the simulated arm'
     )
     parser.add_argument(
+        '--execution-mode',
+        default='closed_loop',
+        choices=('closed_loop', 'open_loop'),
+        help='closed_loop: STPIK in the loop at 100 Hz (the paper, default); open_loop: whole '
+        'trajectories',
+    )
+    parser.add_argument(
         '--headless', action='store_true', help='no Rerun viewer: write the .rrd file only'
     )
     parser.add_argument(
@@ -108,6 +115,7 @@ def start_graph(args: argparse.Namespace, files: RunFiles) -> list[NodeProcess]:
         'seed': args.seed,
         'max_episodes': args.max_episodes,
         'execute': not args.no_execute,
+        'execution_mode': args.execution_mode,
     }
     rerun_mode = 'save' if args.headless else 'spawn'
     specs: list[tuple[str, str, dict[str, Any]]] = [
@@ -124,7 +132,11 @@ def start_graph(args: argparse.Namespace, files: RunFiles) -> list[NodeProcess]:
             },
         ),
         ('jaco2_sim', 'sim_node', {'scenario': args.scenario}),
-        ('stpik_motion_planner', 'motion_planner_node', {'seed': args.seed}),
+        (
+            'stpik_motion_planner',
+            'motion_planner_node',
+            {'seed': args.seed, 'execution_mode': args.execution_mode},
+        ),
         ('qtree_task_planner', 'task_planner_node', {}),
     ]
     nodes: list[NodeProcess] = []
@@ -260,7 +272,7 @@ def main(argv: list[str] | None = None) -> int:
     nodes: list[NodeProcess] = []
     code = 0
     try:
-        print(f'starting the node graph (logs in {files.logs})')
+        print(f'starting the node graph (logs in {files.logs}); execution: {args.execution_mode}')
         nodes = start_graph(args, files)
         print('nodes ready: ' + ', '.join(node.name for node in nodes))
         result = retrieve_target(args, nodes)

@@ -32,6 +32,7 @@ from qtree_recorder import rerun_blueprint as bp
 from qtree_recorder.markers import object_geometry
 
 _LOG = logging.getLogger(__name__)
+EVENTS_STOP = f'{bp.EVENTS_ENTITY}/execution'  # closed-loop stops in the event log
 
 # Colours [RGB 0..255] by role, and for relocated objects.
 ROLE_COLORS = {'target': (40, 180, 70), 'obstacle': (210, 50, 50), 'static': (139, 94, 60)}
@@ -51,7 +52,9 @@ REASONS = {
     302: 'EXECUTION_FAILED', 303: 'PLANNER_BUSY',
 }  # fmt: skip
 TOPICS = ('/robot_description', '/joint_states', '/scene', '/motion_planner/events', '/qtree',
-          '/training_stats')  # fmt: skip
+          '/training_stats', '/motion_planner/tracking')  # fmt: skip
+TRACK_COLORS = {'reference': (120, 120, 130), 'actual': (40, 180, 70)}
+TRACK_EVERY = 50  # log the reference / actual EE paths in pieces of this many ticks [-]
 
 F = TypeVar('F', bound=Callable[..., Any])
 
@@ -110,6 +113,7 @@ class RunView:
         self._urdf: rr.urdf.UrdfTree | None = None
         self._objects: set[str] = set()
         self._tmpdir: tempfile.TemporaryDirectory[str] | None = None
+        self._track: dict[str, list] = {'id': [''], 'reference': [], 'actual': [], 'chunk': [0]}
         self.rec = rr.RecordingStream(application_id, recording_id=recording_id)
         self.rec.set_log_time_enabled(False)  # wall time of logging: meaningless in a replay
         blueprint = bp.default_blueprint()
@@ -327,6 +331,57 @@ class RunView:
             self.rec.log(f'{bp.STATS_ENTITY}/{name}', rr.Scalars(float(value)))
 
     @_guarded
+    def on_tracking(
+        self,
+        object_id: str,
+        phase: str,
+        reference: Sequence[float],
+        actual: Sequence[float],
+        error_m: float,
+        t_ns: int,
+        message: str = '',
+    ) -> None:
+        """One closed-loop tick: EE reference vs actual path of ``object_id``, error curve.
+
+        Args:
+            object_id: the object being relocated.
+            phase: ``'tracking'``, ``'settling'``, ``'done'`` or ``'stopped'``.
+            reference: reference EE position [m] (3,).
+            actual: EE position at the measured joints [m] (3,).
+            error_m: EE position error [m].
+            t_ns: time [ns since epoch].
+            message: why the execution stopped (``'stopped'``).
+        """
+        self._set_time(t_ns)
+        if phase == 'stopped':
+            self.rec.log(EVENTS_STOP, rr.TextLog(message or 'stopped', level='WARN'))
+            return
+        track = self._track
+        if track['id'][0] != object_id:
+            track['id'][0], track['reference'], track['actual'], track['chunk'] = (
+                object_id,
+                [],
+                [],
+                [0],
+            )
+        track['reference'].append(np.asarray(reference, dtype=float)[:3])
+        track['actual'].append(np.asarray(actual, dtype=float)[:3])
+        self.rec.log(f'{bp.TRACKING_ENTITY}/error_mm', rr.Scalars(float(error_m) * 1e3))
+        if len(track['actual']) < TRACK_EVERY and phase != 'done':
+            return
+        # Each piece of path is logged once, to its own entity (the data grows linearly).
+        chunk = track['chunk'][0]
+        for name in ('reference', 'actual'):
+            self.rec.log(
+                f'{bp.TRACKING_ENTITY}/{object_id}/{name}/{chunk:04d}',
+                rr.LineStrips3D([np.array(track[name])], colors=[TRACK_COLORS[name]],
+                                radii=[0.003]),
+                rr.CoordinateFrame(bp.WORLD_FRAME),
+            )  # fmt: skip
+            track[name] = track[name][-1:]  # the next piece starts where this one ends
+        track['chunk'][0] = chunk + 1
+
+    @_guarded
     def on_message(self, topic: str, msg: Any, t_ns: int) -> bool:
         """Log a decoded message of one of :data:`TOPICS`; other topics are ignored.
 
@@ -368,6 +423,12 @@ class RunView:
                 float(msg.epsilon),
                 t_ns,
             )
+        elif topic == '/motion_planner/tracking':
+            ref, act = msg.ee_reference.position, msg.ee_measured.position
+            self.on_tracking(
+                str(msg.object_id), str(msg.phase), (ref.x, ref.y, ref.z), (act.x, act.y, act.z),
+                float(msg.error_m), t_ns, str(msg.message),
+            )  # fmt: skip
         elif topic == '/robot_description':
             if self._urdf is None:
                 self._tmpdir = tempfile.TemporaryDirectory(prefix='qtree_urdf_')

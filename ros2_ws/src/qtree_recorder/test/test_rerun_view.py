@@ -154,3 +154,36 @@ def test_reason_names_match_the_service_definition() -> None:
         (int(value), name) for name, value in re.findall(r'uint16 (\w+)=(\d+)', srv.read_text())
     )
     assert constants == REASONS
+
+
+def test_tracking_shows_reference_and_actual_paths_and_the_error(tmp_path: Path) -> None:
+    from types import SimpleNamespace as Ns
+
+    def point(x, y, z):
+        return Ns(position=Ns(x=x, y=y, z=z))
+
+    rrd = tmp_path / 'tracking.rrd'
+    view = RunView(mode='save', rrd_path=rrd)
+    for k in range(60):
+        msg = Ns(object_id='O2', phase='tracking' if k < 59 else 'done', message='',
+                 ee_reference=point(0.3 + 0.01 * k, 0.0, 0.2),
+                 ee_measured=point(0.3 + 0.01 * k, 0.002, 0.2), error_m=0.002)  # fmt: skip
+        assert view.on_message('/motion_planner/tracking', msg, T_NS + k * 10_000_000)
+    stop = Ns(object_id='O2', phase='stopped', message='closed loop stopped: intruder',
+              ee_reference=point(0, 0, 0), ee_measured=point(0, 0, 0), error_m=0.0)  # fmt: skip
+    view.on_message('/motion_planner/tracking', stop, T_NS + 700_000_000)
+    view.close()
+    assert view.error_count == 0
+    entities = FX.rrd_entities(rrd)
+    pieces = {
+        '/tracking/O2/reference/0000',
+        '/tracking/O2/actual/0000',
+        '/tracking/O2/actual/0001',
+    }
+    assert pieces | {'/tracking/error_mm'} <= entities
+    errors = FX.rrd_column(rrd, '/tracking/error_mm', 'Scalars:scalars')
+    assert len(errors) == 60 and abs(errors[0][0] - 2.0) < 1e-9
+    first = FX.rrd_column(rrd, '/tracking/O2/actual/0000', 'LineStrips3D:strips')[0][0]
+    second = FX.rrd_column(rrd, '/tracking/O2/actual/0001', 'LineStrips3D:strips')[0][0]
+    assert len(first) == 50 and len(second) == 11  # pieces join: 50 + 10 new ticks + 1 shared
+    assert first[-1] == second[0]
