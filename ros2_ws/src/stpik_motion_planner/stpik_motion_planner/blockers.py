@@ -94,26 +94,30 @@ class BlockerFinder:
     """Sweep-first checks and blockers for one :class:`~.planner.MotionPlanner`.
 
     Attributes:
-        sweeps: per object id, one :class:`Sweep` per candidate approach (lazily filled).
+        sweeps: per object id, approach index -> :class:`Sweep` (lazily filled).
         time_s: total wall time spent computing sweeps [s].
     """
 
     def __init__(self, planner: MotionPlanner) -> None:
         self.planner = planner
-        self.sweeps: dict[str, list[Sweep]] = {}
+        self.sweeps: dict[str, dict[int, Sweep]] = {}
         self.time_s = 0.0
 
     def check(self, object_id: str, relocated: Iterable[str]) -> PlanResult:
         """Plan a valid request, using the object's sweeps (no cache; see the module docstring).
 
-        1. No approach works without the movable objects: infeasible, ``blocked_by_immovable``.
-        2. An approach whose sweep is clear of the remaining objects: its motion (re-planned for
-           the request's drop slot if needed) verified against them is the answer.
-        3. Else the planner in the real scene, on the working approaches only; if that fails
-           too, the answer carries the blockers of the approach with the fewest.
+        Sweeps are computed lazily in yaw order: the first working approach whose sweep is clear
+        and whose motion verifies ends the check (a free object costs one plan).
         """
         relocated = list(relocated)
         start = time.perf_counter()
+        done = frozenset(relocated)
+        for index in range(len(self._yaws(object_id))):
+            sweep = self._sweep(object_id, index)
+            if sweep.works and not sweep.blockers(done, HIT_MARGIN_M):
+                reused = self._reuse(object_id, relocated, sweep)
+                if reused is not None:
+                    return replace(reused, planning_time=_since(start))
         sweeps = self._sweeps(object_id)
         working = [s for s in sweeps if s.works]
         if not working:
@@ -125,18 +129,10 @@ class BlockerFinder:
             return replace(
                 first, message=message, blocked_by_immovable=True, planning_time=_since(start)
             )
-        done = frozenset(relocated)
-        ranked = sorted(working, key=lambda s: len(s.blockers(done, HIT_MARGIN_M)))
-        for sweep in ranked:
-            if sweep.blockers(done, HIT_MARGIN_M):
-                break
-            reused = self._reuse(object_id, relocated, sweep)
-            if reused is not None:
-                return replace(reused, planning_time=_since(start))
         result = self.planner.plan(object_id, relocated, yaws=[s.yaw for s in working])
         if result.feasible or not 200 <= int(result.reason) < 300:
             return replace(result, planning_time=_since(start))
-        best = min(working, key=lambda s: len(s.blockers(done, HIT_MARGIN_M)))  # refined
+        best = min(working, key=lambda s: len(s.blockers(done, HIT_MARGIN_M)))
         found = self._blockers(best, done)
         note = f'; blockers: {", ".join(found[:5])}' if found else '; no blocker found'
         return replace(
@@ -188,32 +184,36 @@ class BlockerFinder:
         )
         return replace(result, message=message)
 
-    def _sweeps(self, object_id: str) -> list[Sweep]:
-        if object_id not in self.sweeps:
-            start = time.perf_counter()
-            self.sweeps[object_id] = self._compute(object_id)
-            self.time_s += time.perf_counter() - start
-        return self.sweeps[object_id]
-
-    def _compute(self, object_id: str) -> list[Sweep]:
+    def _yaws(self, object_id: str) -> list[float]:
         from stpik_motion_planner.grasp_choice import candidate_yaws
 
+        centre = np.asarray(self.planner.scenario.object(object_id).position, dtype=float)
+        return candidate_yaws(centre, self.planner.config)
+
+    def _sweeps(self, object_id: str) -> list[Sweep]:
+        """Every candidate approach's sweep of ``object_id``."""
+        return [self._sweep(object_id, i) for i in range(len(self._yaws(object_id)))]
+
+    def _sweep(self, object_id: str, index: int) -> Sweep:
+        """The sweep of approach ``index`` of ``object_id`` (computed once)."""
+        cached = self.sweeps.setdefault(object_id, {})
+        if index not in cached:
+            start = time.perf_counter()
+            cached[index] = self._compute(object_id, self._yaws(object_id)[index])
+            self.time_s += time.perf_counter() - start
+        return cached[index]
+
+    def _compute(self, object_id: str, yaw: float) -> Sweep:
         planner = self.planner
         scenario = planner.scenario
         obj = scenario.object(object_id)
         movable = [o for o in scenario.objects if o.role != 'static' and o.id != object_id]
         others = [o.id for o in movable]
-        full = SceneWorld(movable)
-        out = []
-        centre = np.asarray(obj.position, dtype=float)
-        for yaw in candidate_yaws(centre, planner.config):
-            result = planner.plan(object_id, others, yaws=[yaw], slot_index=SWEEP_SLOT)
-            if not result.feasible:
-                out.append(Sweep(yaw, False, {}, failure=result))
-                continue
-            distances = self._distances(result, obj, full)
-            out.append(Sweep(yaw, True, distances, motion=result, slot=SWEEP_SLOT))
-        return out
+        result = planner.plan(object_id, others, yaws=[yaw], slot_index=SWEEP_SLOT)
+        if not result.feasible:
+            return Sweep(yaw, False, {}, failure=result)
+        distances = self._distances(result, obj, SceneWorld(movable))
+        return Sweep(yaw, True, distances, motion=result, slot=SWEEP_SLOT)
 
     def _distances(
         self, result: PlanResult, obj, scene: SceneWorld, step_rad: float = SWEEP_STEP_RAD
