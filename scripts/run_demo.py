@@ -237,7 +237,8 @@ def report(result: Any) -> None:
     print(f'sequence:  {sequence}')
     print(
         f'episodes:  {result.episodes}   MP calls: {result.mp_calls}   planner runs: '
-        f'{result.planner_runs}   first optimal episode: {result.first_optimal_episode}   '
+        f'{result.planner_runs}   first episode reaching the learned level: '
+        f'{result.first_learned_level_episode}   extraction: {result.extraction}   '
         f'converged: {result.converged}   executed: {result.executed}'
     )
 
