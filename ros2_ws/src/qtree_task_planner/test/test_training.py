@@ -177,17 +177,20 @@ def test_a_short_training_that_reached_the_target_returns_the_best_known_sequenc
 
 
 def test_first_optimal_episode_needs_the_known_optimal_level() -> None:
-    _, unknown, _ = _train('LRND', seed=4, max_episodes=60)
+    """Without the optimal level only the first episode reaching the LEARNED level is reported
+    (before: that number was reported as the first optimal episode, also when the learned
+    sequence was sub-optimal, as here: level 5 learned, level 4 reached at episode 2)."""
+    _, unknown, _ = _train('LRND', seed=3, max_episodes=60)
     assert unknown.optimal_level == 0 and unknown.first_optimal_episode == -1
+    assert len(unknown.sequence) == 5  # sub-optimal: the toy optimum is level 4
     first = unknown.history[unknown.first_learned_level_episode - 1]
-    assert first.reached_target and len(first.sequence) == len(unknown.sequence)
-    assert all(
-        not (s.reached_target and len(s.sequence) == len(unknown.sequence))
-        for s in unknown.history[: first.episode - 1]
+    assert first.reached_target and len(first.sequence) == 5
+    assert not any(
+        s.reached_target and len(s.sequence) == 5 for s in unknown.history[: first.episode - 1]
     )
-    _, known, _ = _train('LRND', seed=4, max_episodes=60, optimal_level=4)
-    assert known.first_optimal_episode == unknown.first_learned_level_episode
+    _, known, _ = _train('LRND', seed=3, max_episodes=60, optimal_level=4)
     assert known.sequence == unknown.sequence  # the level only changes what is reported
+    assert known.first_optimal_episode == 2 < unknown.first_learned_level_episode == 8
 
 
 @pytest.mark.parametrize('rule', ['not-failed', 'positive-q'])
