@@ -71,7 +71,9 @@ def default_blueprint(*, robot_entity: str = ROBOT_ENTITY) -> rrb.Blueprint:
         name='episode curves',
     )
     right = rrb.Vertical(
-        rrb.GraphView(name='Q-tree', origin=QTREE_ENTITY),
+        rrb.Spatial2DView(
+            name='Q-tree (top 5 per level, extracted path orange)', origin=QTREE_ENTITY
+        ),
         curves,
         rrb.TextLogView(
             name='planning events',
