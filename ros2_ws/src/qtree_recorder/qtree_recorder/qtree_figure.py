@@ -121,10 +121,10 @@ def _kind(object_id: str, q: float, reward: float | None, target_id: str | None)
 
 
 def infer_target(edges: Sequence[EdgeTuple]) -> str | None:
-    """The target id: the object of an edge whose reward (or Q) is r_T."""
+    """The target id: the object of an edge with a positive reward (only the target's, eq. 8),
+    or, without rewards, of an edge whose Q is r_T."""
     for edge in edges:
-        value = edge[5] if len(edge) > 5 else edge[3]
-        if value >= TARGET_REWARD:
+        if (edge[5] > 0.0) if len(edge) > 5 else (edge[3] >= TARGET_REWARD):
             return str(edge[2])
     return None
 
@@ -303,12 +303,11 @@ def save_png(drawing: TreeDrawing, path: Path | str, *, title: str = 'Q-tree') -
         Line2D([], [], color=STYLE[KIND_TARGET][0], lw=1.8, label='target relocated (r = 100)'),
         Line2D([], [], color=HIGHLIGHT, lw=6, alpha=0.45, label='extracted sequence (eq. 19)'),
     ]
-    ax.legend(handles=legend, loc='lower right', fontsize=7, framealpha=0.9)
+    fig.legend(handles=legend, loc='lower right', ncol=4, fontsize=7, frameon=False)
     ax.set_title(title, fontsize=10)
-    note = drawing.note()
-    if note:
-        fig.text(0.01, 0.01, note, fontsize=7, ha='left', va='bottom', wrap=True)
-    fig.tight_layout(rect=(0, 0.04 if note else 0, 1, 1))
+    note = drawing.note() or f'all {drawing.total_nodes} nodes and {drawing.total_edges} edges'
+    fig.text(0.01, 0.012, note, fontsize=7, ha='left', va='bottom', wrap=True)
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=130)
     plt.close(fig)

@@ -44,6 +44,7 @@ EDGE_COLORS = {KIND_FEASIBLE: (150, 150, 160), KIND_INFEASIBLE: (214, 39, 40),
                KIND_TARGET: (44, 160, 44)}  # fmt: skip
 ROOT_LABEL = 's_H'
 QTREE_TOP_K = 5  # Q-tree view: nodes kept per level
+QTREE_X_SPACING = 240.0  # Q-tree view: distance between neighbouring leaves [graph units]
 # qtree_msgs constants (ObjectState.msg, RelocateObject.srv) as names.
 ROLES = {0: 'target', 1: 'obstacle', 2: 'static'}
 SHAPES = {0: 'cylinder', 1: 'box'}
@@ -291,7 +292,7 @@ class RunView:
         self._set_time(t_ns, episode)
         drawing = layout_tree(node_sequences, edges, top_k=QTREE_TOP_K)
         order = sorted(drawing.positions)
-        scale = np.array([bp.SIBLING_SPACING, bp.LEVEL_SPACING])
+        scale = np.array([QTREE_X_SPACING, bp.LEVEL_SPACING])
         xy = {n: np.asarray(drawing.positions[n], dtype=float) * scale for n in order}
         incoming = {e.child: e for e in drawing.edges if e.tree_edge}
         on_path = set(drawing.path)
@@ -303,7 +304,9 @@ class RunView:
             return EDGE_COLORS[edge.kind] if edge is not None else NODE_COLOR
 
         labels = [
-            incoming[n].label if n in incoming else f'{ROOT_LABEL} (episode {episode})'
+            f'{incoming[n].object_id} Q={incoming[n].q:+.1f}'
+            if n in incoming
+            else f'{ROOT_LABEL} (episode {episode})'
             for n in order
         ]
         self.rec.log(
@@ -319,11 +322,12 @@ class RunView:
                                     for e in drawing.edges],
                             radii=[3.0 if e.highlighted else 1.0 for e in drawing.edges]),
         )  # fmt: skip
-        note = drawing.note() or f'all {drawing.total_nodes} nodes shown'
+        note = (f'top {QTREE_TOP_K} per level by Q: {len(order)} of {drawing.total_nodes} nodes'
+                if drawing.omitted_nodes else f'all {drawing.total_nodes} nodes')  # fmt: skip
         self.rec.log(
             f'{bp.QTREE_ENTITY}/note',
-            rr.Points2D([[0.0, -bp.LEVEL_SPACING]], labels=[note], radii=[0.5],
-                        show_labels=True),
+            rr.Points2D([xy[0] - [0.0, bp.LEVEL_SPACING * 0.6]] if order else [[0.0, 0.0]],
+                        labels=[note], radii=[0.5], show_labels=True),
         )  # fmt: skip
 
     @_guarded

@@ -71,7 +71,7 @@ def test_saved_rrd_holds_every_part_of_the_view(tmp_path: Path, urdf: Path) -> N
     }  # fmt: skip
     assert expected <= entities, expected - entities
     labels = FX.rrd_column(rrd, '/qtree/nodes', 'Points2D:labels')
-    assert labels == [['s_H (episode 3)', 'O1 Q=+0.50', 'T Q=+1.00']]
+    assert labels == [['s_H (episode 3)', 'O1 Q=+0.5', 'T Q=+1.0']]
     assert len(FX.rrd_column(rrd, '/qtree/edges', 'LineStrips2D:strips')[0]) == 2
     assert FX.rrd_column(rrd, '/stats/q_bar', 'Scalars:scalars') == [[1.5]]
     colors = FX.rrd_column(rrd, '/scene/objects/O1', 'Cylinders3D:colors')
