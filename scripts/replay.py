@@ -12,7 +12,7 @@ Modes (exactly one):
               (needs a graphics stack, e.g. Mesa lavapipe: WGPU_BACKEND=vulkan).
   --tree-png  draw the learned Q-tree (last /qtree message) like the paper's Figure 3 to a PNG:
               levels as rows, Q on the edges, extracted sequence highlighted, --top-k nodes
-              per level (default 5) with a note of what was left out.
+              per level (default 4) with a note of what was left out.
   --publish   republish the recorded topics on a live ROS 2 graph with their original timing
               (like `ros2 bag play`): CDR bytes unchanged, QoS from the recorded
               offered_qos_profiles (transient local where recorded so). --rate scales the speed,
@@ -64,7 +64,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     mode.add_argument('--rerun', action='store_true', help='convert to a Rerun recording')
     mode.add_argument('--publish', action='store_true', help='republish on a live ROS graph')
     mode.add_argument('--tree-png', type=Path, metavar='PNG', help='draw the learned Q-tree')
-    parser.add_argument('--top-k', type=int, default=5, help='--tree-png: nodes per level')
+    parser.add_argument('--top-k', type=int, default=4, help='--tree-png: nodes per level')
     rerun = parser.add_argument_group('--rerun options')
     rerun.add_argument('--rrd', type=Path, help='output .rrd (default: LOG with suffix .rrd)')
     rerun.add_argument('--spawn', action='store_true', help='show the run in a Rerun viewer')

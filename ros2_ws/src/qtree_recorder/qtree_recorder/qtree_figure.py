@@ -23,7 +23,7 @@ from pathlib import Path
 ROOT_LABEL = 's_H'
 TARGET_REWARD = 100.0  # r_T of eq. (8): a target edge's Q stays exactly r_T
 KIND_FEASIBLE, KIND_INFEASIBLE, KIND_TARGET = 'feasible', 'infeasible', 'target'
-DEFAULT_TOP_K = 5
+DEFAULT_TOP_K = 4
 
 EdgeTuple = tuple  # (parent, child, object_id, q, on_best_path[, reward])
 

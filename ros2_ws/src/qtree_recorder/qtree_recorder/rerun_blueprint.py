@@ -72,7 +72,7 @@ def default_blueprint(*, robot_entity: str = ROBOT_ENTITY) -> rrb.Blueprint:
     )
     right = rrb.Vertical(
         rrb.Spatial2DView(
-            name='Q-tree (top 5 per level, extracted path orange)', origin=QTREE_ENTITY
+            name='Q-tree (top 4 per level by Q, extracted path orange)', origin=QTREE_ENTITY
         ),
         curves,
         rrb.TextLogView(
@@ -90,7 +90,7 @@ def default_blueprint(*, robot_entity: str = ROBOT_ENTITY) -> rrb.Blueprint:
         row_shares=[3, 2, 2],
     )
     return rrb.Blueprint(
-        rrb.Horizontal(scene_view, right, column_shares=[3, 2]),
+        rrb.Horizontal(scene_view, right, column_shares=[1, 1]),
         rrb.TimePanel(timeline=TIME_TIMELINE, expanded=False, play_state='following'),
         collapse_panels=True,
     )

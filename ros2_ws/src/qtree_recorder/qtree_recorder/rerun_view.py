@@ -30,7 +30,13 @@ import rerun as rr
 
 from qtree_recorder import rerun_blueprint as bp
 from qtree_recorder.markers import object_geometry
-from qtree_recorder.qtree_figure import KIND_FEASIBLE, KIND_INFEASIBLE, KIND_TARGET, layout_tree
+from qtree_recorder.qtree_figure import (
+    DEFAULT_TOP_K,
+    KIND_FEASIBLE,
+    KIND_INFEASIBLE,
+    KIND_TARGET,
+    layout_tree,
+)
 
 _LOG = logging.getLogger(__name__)
 
@@ -44,8 +50,9 @@ HIGHLIGHT_COLOR = (255, 127, 14)  # the extracted sequence
 EDGE_COLORS = {KIND_FEASIBLE: (150, 150, 160), KIND_INFEASIBLE: (214, 39, 40),
                KIND_TARGET: (44, 160, 44)}  # fmt: skip
 ROOT_LABEL = 's_H'
-QTREE_TOP_K = 5  # Q-tree view: nodes kept per level
-QTREE_X_SPACING = 240.0  # Q-tree view: distance between neighbouring leaves [graph units]
+QTREE_TOP_K = DEFAULT_TOP_K  # Q-tree view: nodes kept per level (as the PNG)
+QTREE_X_SPACING = 175.0  # Q-tree view: distance between neighbouring leaves [view units]
+QTREE_Y_SPACING = 110.0  # Q-tree view: distance between levels [view units]
 # qtree_msgs constants (ObjectState.msg, RelocateObject.srv) as names.
 ROLES = {0: 'target', 1: 'obstacle', 2: 'static'}
 STATUSES = {0: 'in_clutter', 1: 'grasped', 2: 'relocated'}
@@ -292,7 +299,7 @@ class RunView:
         self._set_time(t_ns, episode)
         drawing = layout_tree(node_sequences, edges, top_k=QTREE_TOP_K)
         order = sorted(drawing.positions)
-        scale = np.array([QTREE_X_SPACING, bp.LEVEL_SPACING])
+        scale = np.array([QTREE_X_SPACING, QTREE_Y_SPACING])
         xy = {n: np.asarray(drawing.positions[n], dtype=float) * scale for n in order}
         incoming = {e.child: e for e in drawing.edges if e.tree_edge}
         on_path = set(drawing.path)
@@ -326,7 +333,7 @@ class RunView:
                 if drawing.omitted_nodes else f'all {drawing.total_nodes} nodes')  # fmt: skip
         self.rec.log(
             f'{bp.QTREE_ENTITY}/note',
-            rr.Points2D([xy[0] - [0.0, bp.LEVEL_SPACING * 0.6]] if order else [[0.0, 0.0]],
+            rr.Points2D([xy[0] - [0.0, QTREE_Y_SPACING * 0.8]] if order else [[0.0, 0.0]],
                         labels=[note], radii=[0.5], show_labels=True),
         )  # fmt: skip
 
