@@ -51,3 +51,15 @@ def test_bad_arguments_are_rejected() -> None:
         benchmark.parse_args(['--trainings', '0'])
     with pytest.raises(SystemExit):
         benchmark.parse_args(['--ros', '--oracle', 'synthetic'])
+
+
+def test_tag_names_the_outputs_with_one_separator() -> None:
+    """``--tag X`` writes benchmark_X.* (was: benchmarkX.md); a leading '_' is not doubled."""
+    assert benchmark.parse_args(['--tag', 'dev']).tag == 'dev'
+    assert benchmark.parse_args(['--tag', '_dev']).tag == 'dev'
+    assert benchmark.parse_args([]).tag == ''
+    assert benchmark.parse_args(['--paper-sweep']).tag == 'sweep'
+    with pytest.raises(SystemExit):
+        benchmark.parse_args(['--ros', '--hlrnd-rule', 'positive-q'])
+    with pytest.raises(SystemExit):
+        benchmark.parse_args(['--sweep-windows', '0'])
