@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from qtree_node_support.text import quote
 from qtree_scene.scene import ObjectSpec, Scenario, Status
 
 from jaco2_sim.exceptions import WorldError
@@ -75,7 +76,7 @@ class World:
             return self.objects[object_id]
         except KeyError:
             known = ', '.join(self.objects)
-            raise WorldError(f'unknown object {object_id!r} (known: {known})') from None
+            raise WorldError(f'unknown object {quote(object_id)} (known: {known})') from None
 
     def attach(self, object_id: str, ee_pose: pin.SE3) -> float:
         """Grasp ``object_id``: it keeps its current offset to the end-effector.
@@ -92,9 +93,11 @@ class World:
         """
         state = self.state(object_id)
         if self.attached_id is not None:
-            raise WorldError(f'cannot attach {object_id!r}: {self.attached_id!r} is attached')
+            raise WorldError(
+                f'cannot attach {quote(object_id)}: {quote(self.attached_id)} is attached'
+            )
         if state.spec.role == 'static':
-            raise WorldError(f'cannot attach {object_id!r}: it is a static object')
+            raise WorldError(f'cannot attach {quote(object_id)}: it is a static object')
         self._object_to_ee = ee_pose.actInv(state.pose)
         self.attached_id = object_id
         state.status = 'grasped'
@@ -126,9 +129,11 @@ class World:
         state = self.state(object_id)
         if self.attached_id != object_id:
             held = repr(self.attached_id) if self.attached_id else 'nothing'
-            raise WorldError(f'cannot detach {object_id!r}: it is not attached ({held} is)')
+            raise WorldError(f'cannot detach {quote(object_id)}: it is not attached ({held} is)')
         if status not in RELEASE_STATUSES:
-            raise WorldError(f'release status must be one of {RELEASE_STATUSES}, got {status!r}')
+            raise WorldError(
+                f'release status must be one of {RELEASE_STATUSES}, got {quote(status)}'
+            )
         state.status = status
         self.attached_id = None
         self.version += 1

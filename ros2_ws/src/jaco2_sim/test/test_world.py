@@ -82,3 +82,9 @@ def test_reset(world: World) -> None:
     assert world.attached_id is None
     assert world.state('O3').status == 'in_clutter'
     np.testing.assert_allclose(world.state('O3').pose.translation, start)
+
+
+def test_huge_ids_are_quoted_short(world: World) -> None:
+    with pytest.raises(WorldError, match=r"unknown object 'xxxx.*…' \(10000 characters\)") as err:
+        world.attach('x' * 10_000, pin.SE3.Identity())  # was echoed in full (#18)
+    assert len(str(err.value)) < 300

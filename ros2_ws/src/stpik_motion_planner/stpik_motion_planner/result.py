@@ -28,6 +28,7 @@ class Reason(IntEnum):
     SCENE_COLLISION = 205
     TIMEOUT = 301
     EXECUTION_FAILED = 302
+    PLANNER_BUSY = 303  # not planned: the queue was full; ask again later (#18)
 
 
 def _empty(*shape: int) -> np.ndarray:
