@@ -6,15 +6,18 @@ Declared and used by :mod:`jaco2_sim.sim_node`; the checks call
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 from jaco2_description.model import urdf_text
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from jaco2_sim.conversions import parameter_descriptor
+from jaco2_sim.disturbances import PARAMETER_FIELDS
 from jaco2_sim.simulation import EXPECTED_ERRORS, Simulation
 
 LATCHED_QOS = QoSProfile(  # /scene and /robot_description
@@ -38,6 +41,12 @@ PARAMETERS = [
         10_000,
         ('longer /joint_trajectory messages are rejected unread', 1, MAX_TRAJECTORY_POINTS_CAP),
     ),
+    ('command_topic', '/joint_command', ('streamed sensor_msgs/JointState arm references',)),
+    ('joint_offset_rad', [0.0] * 7, ('disturbance: servo offset per arm joint [rad]',)),
+    ('command_latency_s', 0.0, ('disturbance: command latency [s]', 0.0, 2.0)),
+    ('velocity_limit_scale', 1.0, ('disturbance: fraction of the velocity limits', 0.05, 1.0)),
+    ('measurement_noise_rad', 0.0, ('disturbance: joint-state noise σ [rad]', 0.0, 0.1)),
+    ('noise_seed', 0, ('seed of the measurement noise', 0, 2**31 - 1)),
 ]
 
 
@@ -48,13 +57,32 @@ def declare_parameters(node: Node) -> None:
     node.declare_parameters('', [*params, ('robot_description', urdf_text(), urdf)])
 
 
-def check_parameters(
-    core: Simulation, params: list[Parameter], logger: Any
-) -> SetParametersResult:
+def param(node: Node, name: str) -> Any:
+    """The value of parameter ``name`` of ``node``; None when declared without a value."""
+    try:
+        return node.get_parameter(name).value
+    except ParameterUninitializedException:
+        return None
+
+
+def apply_disturbances(node: Node, core: Simulation, params: Sequence[Parameter]) -> None:
+    """After a parameter change: reconfigure the disturbances if one of ``params`` is one."""
+    if any(p.name in PARAMETER_FIELDS for p in params):
+        core.configure_disturbances(disturbance_values(node))
+
+
+def disturbance_values(node: Node, params: Sequence[Parameter] = ()) -> dict[str, Any]:
+    """The disturbance parameters of ``node``, with the changes in ``params`` applied."""
+    values = {name: node.get_parameter(name).value for name in PARAMETER_FIELDS}
+    return values | {p.name: p.value for p in params if p.name in PARAMETER_FIELDS}
+
+
+def check_parameters(node: Node, core: Simulation, params: list[Parameter]) -> SetParametersResult:
     """The on-set-parameters answer: the first invalid value's reason, else success."""
+    logger = node.get_logger()
     for p in params:
         try:
-            core.check_parameter(p.name, p.value)
+            core.check_parameter(p.name, p.value, disturbance_values(node, params))
         except (*EXPECTED_ERRORS, TypeError, ValueError) as err:
             return SetParametersResult(successful=False, reason=f'{p.name}: {err}')
         except Exception as err:  # a bad value must not kill the node

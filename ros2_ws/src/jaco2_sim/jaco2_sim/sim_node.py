@@ -16,7 +16,7 @@ from qtree_node_support.lifecycle import run_node
 from qtree_node_support.qos import SERVICE_QOS
 from qtree_node_support.text import quote
 from qtree_scene.message import parse_scene_msg
-from rclpy.exceptions import InvalidParameterValueException, ParameterUninitializedException
+from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
@@ -36,20 +36,20 @@ class Jaco2SimNode(Node):
         """Declare the parameters, load the scenario, start publishing (``node_options``: Node)."""
         super().__init__('jaco2_sim', **node_options)
         api.declare_parameters(self)
-        p = self._param
+        p = lambda name: api.param(self, name)  # noqa: E731
         self.core = Simulation(
-            p('scenario'), p('sim_rate_hz'), p('finger_angle_rad'), p('initial_configuration')
+            *map(p, ('scenario', 'sim_rate_hz', 'finger_angle_rad', 'initial_configuration')),
+            api.disturbance_values(self),
         )
         self.sim = self.core.sim
-        self.add_on_set_parameters_callback(
-            lambda params: api.check_parameters(self.core, params, self.get_logger())
-        )
+        self.add_on_set_parameters_callback(lambda ps: api.check_parameters(self, self.core, ps))
         self.add_post_set_parameters_callback(self._apply_parameters)
         self.state_pub = self.create_publisher(JointState, '/joint_states', api.STATE_QOS)
         self.scene_pub = self.create_publisher(Scene, '/scene', api.LATCHED_QOS)
         self.urdf_pub = self.create_publisher(String, '/robot_description', api.LATCHED_QOS)
         qos, on_raw = api.TRAJECTORY_QOS, self._on_raw_trajectory
         self.create_subscription(JointTrajectory, '/joint_trajectory', on_raw, qos, raw=True)
+        self.create_subscription(JointState, p('command_topic'), self._on_command, qos)  # streamed
         for kind, name, cb in [(ResetScene, '~/reset_scene', self._on_reset),
                                (SetScene, '~/set_scene', self._on_set_scene),
                                (AttachObject, '~/attach_object', self._on_attach)]:  # fmt: skip
@@ -65,13 +65,8 @@ class Jaco2SimNode(Node):
         """The current scene (:class:`~qtree_scene.scene.Scenario`)."""
         return self.core.scenario
 
-    def _param(self, name: str):
-        try:
-            return self.get_parameter(name).value
-        except ParameterUninitializedException:
-            return None
-
     def _apply_parameters(self, params: list[Parameter]) -> None:
+        api.apply_disturbances(self, self.core, params)
         for p in params:
             if p.name == 'scenario':
                 try:
@@ -91,13 +86,14 @@ class Jaco2SimNode(Node):
         return message or ''
 
     def _on_timer(self) -> None:
-        if self.core.step():
+        finished, errors = self.core.step()
+        for error in errors:
+            self._reject_trajectory(f'(delayed command) {error}')
+        if finished:
             self.get_logger().info('trajectory finished')
         now = self.get_clock().now()
-        self.state_pub.publish(
-            conv.joint_state_msg(now.to_msg(), self.sim.q, self.sim.velocity, self.core.fingers)
-        )
-        if self.core.scene_due(now.nanoseconds * 1e-9, self._param('scene_rate_hz')):
+        self.state_pub.publish(conv.joint_state_msg(now.to_msg(), *self.core.joint_state()))
+        if self.core.scene_due(now.nanoseconds * 1e-9, api.param(self, 'scene_rate_hz')):
             self._publish_scene()
 
     def _publish_scene(self) -> None:
@@ -108,7 +104,7 @@ class Jaco2SimNode(Node):
     def _on_raw_trajectory(self, raw: bytes) -> None:
         """Reject an oversized trajectory from its CDR lengths, else deserialise and follow it."""
         try:
-            msg = conv.decode_trajectory(raw, self._param('max_trajectory_points'))
+            msg = conv.decode_trajectory(raw, api.param(self, 'max_trajectory_points'))
             warning, info = self.core.follow(*conv.trajectory_arrays(msg))
         except EXPECTED_ERRORS as err:  # TrajectoryError among them
             self._reject_trajectory(str(err))
@@ -116,6 +112,10 @@ class Jaco2SimNode(Node):
         if warning:
             self.get_logger().warning(warning)
         self.get_logger().info(info)
+
+    def _on_command(self, msg: JointState) -> None:  # a streamed reference (closed loop)
+        if why := self.core.command_point(list(msg.name), list(msg.position)):
+            self.get_logger().warning(f'command rejected: {why}', throttle_duration_sec=1.0)
 
     def _reject_trajectory(self, why: str) -> None:
         self.get_logger().warning(f'trajectory rejected: {why}')

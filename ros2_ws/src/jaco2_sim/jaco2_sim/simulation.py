@@ -29,6 +29,7 @@ from qtree_scene.message import STATUS_CODES
 from qtree_scene.scenario import load_scenario
 from qtree_scene.scene import Scenario
 
+from jaco2_sim.disturbances import PARAMETER_FIELDS, DisturbedDrive, from_parameters
 from jaco2_sim.exceptions import Jaco2SimError, ModelError, ScenarioError
 from jaco2_sim.integrator import JointIntegrator
 from jaco2_sim.world import World
@@ -46,6 +47,7 @@ class Simulation:
         robot: kinematic model (fingers fixed at ``finger_angle`` [rad]).
         scenario: the current scene; ``world`` its object poses and statuses.
         sim: the joint integrator (arm configuration [rad], reference trajectory).
+        drive: commands to ``sim`` and its measurement, with the configured disturbances.
         fingers: finger joint angles published with the arm, shape (6,) [rad].
     """
 
@@ -55,8 +57,11 @@ class Simulation:
         rate_hz: float,
         finger_angle: float,
         q0: Sequence[float] | None = None,
+        disturbances: dict[str, Any] | None = None,
     ) -> None:
         """Load ``scenario`` (name or YAML path); the arm starts at ``q0`` or the scenario home.
+
+        ``disturbances``: the :data:`~jaco2_sim.disturbances.PARAMETER_FIELDS` values (none: off).
 
         Raises:
             ScenarioError, ModelError, Jaco2SimError: a bad scenario, angle or configuration.
@@ -67,19 +72,24 @@ class Simulation:
         self.sim = JointIntegrator(
             self.robot.limits, rate_hz, self.scenario.home if q0 is None else q0
         )
+        self.drive = DisturbedDrive(self.sim, from_parameters(disturbances or {}))
         self.fingers = np.zeros(len(FINGER_JOINTS))
         self.fingers[:3] = self.robot.finger_angle
         self._scene_version = -1
         self._last_scene_s = 0.0
 
-    def check_parameter(self, name: str, value: Any) -> None:
+    def check_parameter(self, name: str, value: Any, disturbances: dict[str, Any]) -> None:
         """Raise if ``value`` is not valid for parameter ``name`` (checked before it is set).
+
+        ``disturbances``: every disturbance parameter's value with this change applied.
 
         Raises:
             Jaco2SimError: ``finger_angle_rad`` cannot change after start.
             ScenarioError, ModelError, TypeError, ValueError: a bad scenario or configuration.
         """
-        if name == 'scenario':
+        if name in PARAMETER_FIELDS:
+            from_parameters(disturbances)
+        elif name == 'scenario':
             load_scenario(value)
         elif name == 'initial_configuration' and value is not None:
             JointIntegrator(self.robot.limits, q0=np.asarray(value, dtype=float))
@@ -90,6 +100,7 @@ class Simulation:
         """Make ``scenario`` the scene and teleport home; on any exception nothing has changed."""
         world = World(scenario)
         self.sim.reset(np.asarray(scenario.home))
+        self.drive.delay.clear()
         self.scenario, self.world = scenario, world
 
     def load(self, name: str) -> None:
@@ -109,12 +120,33 @@ class Simulation:
         self.install(scenario)
         return f'scene {quote(scenario.name)} set ({len(scenario.objects)} objects)'
 
-    def step(self) -> bool:
-        """One period: the arm moves, the held object follows. True when a trajectory ends."""
+    def joint_state(self) -> tuple[Any, Any, Any]:
+        """(measured arm angles [rad] (7,), velocities [rad/s] (7,), finger angles [rad] (6,))."""
+        return self.drive.measured(), self.sim.velocity, self.fingers
+
+    def command_point(self, names: list[str], positions: list[float]) -> str:
+        """Follow a streamed joint reference (closed-loop execution); '' or why it is rejected."""
+        try:
+            self.drive.command('point', names, positions)
+        except (Jaco2SimError, ValueError) as err:
+            return str(err)
+        return ''
+
+    def configure_disturbances(self, values: dict[str, Any]) -> None:
+        """Apply new disturbance parameter values (checked before)."""
+        self.drive.configure(from_parameters(values))
+
+    def step(self) -> tuple[bool, list[str]]:
+        """One period: delayed commands applied, the arm moves, the held object follows.
+
+        Returns:
+            (a trajectory ended, why delayed commands were rejected).
+        """
+        errors = self.drive.apply_due()
         finished = self.sim.step()
         if self.world.attached_id is not None:
             self.world.update(self.robot.ee_pose(self.sim.q))
-        return finished
+        return finished, errors
 
     def scene_due(self, now_s: float, rate_hz: float) -> bool:
         """Whether the world changed and the last /scene is older than ``1 / rate_hz`` [s]."""
@@ -137,9 +169,10 @@ class Simulation:
             Jaco2SimError, ModelError: a bad trajectory (the arm keeps its current motion).
         """
         if len(times) == 0:
+            self.drive.delay.clear()
             self.sim.cancel()
             return '', 'empty trajectory: stopping'
-        clamped = self.sim.set_reference(names, times, positions, velocities)
+        clamped = self.drive.command('trajectory', names, times, positions, velocities)
         warning = 'trajectory beyond the joint limits: clamped to them' if clamped else ''
         return warning, f'following a trajectory of {len(times)} points'
 

@@ -2,8 +2,9 @@
 
 Parameters, entities and callbacks that convert messages (:mod:`.conversions`) and call
 :class:`~stpik_motion_planner.service.PlannerService` (limits and timing are documented there);
-with ``execute=true`` :class:`~stpik_motion_planner.execution.TrajectoryExecution` streams the
-trajectory to the arm (``trajectory_topic``) and grasps through ``attach_service``.
+with ``execute=true`` :class:`~stpik_motion_planner.closed_loop_execution.Execution` drives the
+arm (``execution_mode``: closed loop on ``command_topic``, or whole trajectories on
+``trajectory_topic``) and grasps through ``attach_service``.
 """
 
 from __future__ import annotations
@@ -22,8 +23,8 @@ from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 
 from stpik_motion_planner import interface as api
+from stpik_motion_planner.closed_loop_execution import Execution
 from stpik_motion_planner.conversions import fill_relocate_response, planning_event_msg
-from stpik_motion_planner.execution import TrajectoryExecution
 from stpik_motion_planner.scene_checks import format_id, format_ids
 from stpik_motion_planner.service import MAX_WAITING_PLANS, PlannerService
 
@@ -43,11 +44,11 @@ class MotionPlannerNode(Node):
         self.create_subscription(
             Scene,
             '/scene',
-            self._service.on_scene,
+            self._on_scene,
             api.SCENE_QOS,
             callback_group=MutuallyExclusiveCallbackGroup(),
         )
-        self._execution = TrajectoryExecution(self)  # trajectory, joint states, attach service
+        self._execution = Execution(self)  # open or closed loop (execution_mode)
         self._event_pub = self.create_publisher(PlanningEvent, '/motion_planner/events', 10)
         self.create_service(
             RelocateObject,
@@ -64,6 +65,10 @@ class MotionPlannerNode(Node):
         else:
             self.get_logger().info(line)
 
+    def _on_scene(self, msg: Scene) -> None:
+        self._execution.on_scene(msg)  # the live scene of the closed loop
+        self._service.on_scene(msg)
+
     def _on_parameters(self, params: list) -> SetParametersResult:
         result, config = api.check_parameters(params, api.planner_config(self))
         if config is not None:
@@ -76,7 +81,7 @@ class MotionPlannerNode(Node):
         wait_s = self.get_parameter('request_timeout_s').value
         result = self._service.answer(request.object_id, relocated, received, wait_s)
         if result.feasible and request.execute:
-            follow = lambda r: self._execution.follow(r, request.object_id)  # noqa: E731
+            follow = lambda r: self._execution.follow(r, request.object_id, relocated)  # noqa: E731
             result = self._service.execute(result, follow)
         fill_relocate_response(response, result, clip(result.message, MAX_MESSAGE_CHARS))
         stamp = self.get_clock().now().to_msg()
