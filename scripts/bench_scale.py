@@ -3,7 +3,8 @@
 clutter of 10-50 obstacles; writes benchmarks/results/scale.json, scale.md and scale.png.
 
 The work lives in ``qtree_task_planner.bench_scale``; tasks (one per scene) run through
-``benchmark.run_all`` (in process, ``--workers`` processes, or ``--ray``).
+``qtree_task_planner.benchmarking.runner.run_all`` like ``scripts/benchmark.py`` (in process,
+``--workers`` processes, or ``--ray``).
 
 Usage:
     python scripts/bench_scale.py                          # real planner, full grid, one core
@@ -19,7 +20,7 @@ import sys
 import time
 from pathlib import Path
 
-from benchmark import RESULTS, run_all
+from benchmark import RESULTS
 from qtree_task_planner.bench_scale import (
     METHODS,
     ScaleTask,
@@ -28,6 +29,7 @@ from qtree_task_planner.bench_scale import (
     run_scene,
     summarize,
 )
+from qtree_task_planner.benchmarking.runner import run_all
 
 NOTES = [
     'planner runs = distinct (set, object) pairs a method asked (a fresh planner with a set '
