@@ -249,14 +249,23 @@ def report(result: Any) -> None:
     print(f'sequence:  {sequence}')
     print(
         f'episodes:  {result.episodes}   MP calls: {result.mp_calls}   planner runs: '
-        f'{result.planner_runs}   first optimal episode: {result.first_optimal_episode}   '
+        f'{result.planner_runs}   first episode reaching the learned level: '
+        f'{result.first_learned_level_episode}   extraction: {result.extraction}   '
         f'converged: {result.converged}   executed: {result.executed}'
     )
 
 
 def print_files(files: RunFiles) -> None:
-    """Say where the MCAP log, the Rerun recording and the node logs are."""
+    """Say where the MCAP log, the Q-tree picture, the Rerun recording and the node logs are."""
     print(f'MCAP log:  {files.mcap}{"" if files.mcap.exists() else "  (missing!)"}')
+    if files.mcap.exists():
+        from qtree_recorder.mcap_reader import ReplayError
+        from qtree_recorder.qtree_figure import tree_png_beside
+
+        try:
+            print(f'Q-tree:    {tree_png_beside(files.mcap)}')
+        except ReplayError as err:
+            print(f'Q-tree:    not drawn ({err})')
     print(f'Rerun:     {files.rrd}{"" if files.rrd.exists() else "  (not written)"}')
     print(f'node logs: {files.logs}')
     print(f'open with: rerun {files.mcap.name}   or   python scripts/replay.py --summary ...')

@@ -76,7 +76,9 @@ def default_blueprint(*, robot_entity: str = ROBOT_ENTITY) -> rrb.Blueprint:
         name='episode curves',
     )
     right = rrb.Vertical(
-        rrb.GraphView(name='Q-tree', origin=QTREE_ENTITY),
+        rrb.Spatial2DView(
+            name='Q-tree (top 4 per level by Q, extracted path orange)', origin=QTREE_ENTITY
+        ),
         curves,
         rrb.TextLogView(
             name='planning events',
@@ -93,7 +95,7 @@ def default_blueprint(*, robot_entity: str = ROBOT_ENTITY) -> rrb.Blueprint:
         row_shares=[3, 2, 2],
     )
     return rrb.Blueprint(
-        rrb.Horizontal(scene_view, right, column_shares=[3, 2]),
+        rrb.Horizontal(scene_view, right, column_shares=[1, 1]),
         rrb.TimePanel(timeline=TIME_TIMELINE, expanded=False, play_state='following'),
         collapse_panels=True,
     )

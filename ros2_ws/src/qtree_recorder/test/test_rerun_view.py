@@ -66,11 +66,13 @@ def test_saved_rrd_holds_every_part_of_the_view(tmp_path: Path, urdf: Path) -> N
         '/j2s7s300/visual_geometries/j2s7s300_link_base/visual_0',
         '/tf/j2s7s300_joint_1', '/tf/j2s7s300_joint_7', '/tf/j2s7s300_joint_finger_tip_3',
         '/scene/objects/table', '/scene/objects/T', '/scene/objects/O1', '/scene/drop_zone',
-        '/plans/O1', '/events', '/qtree',
+        '/plans/O1', '/events', '/qtree/nodes', '/qtree/edges', '/qtree/note',
         '/stats/q_bar', '/stats/nodes', '/stats/edges', '/stats/mp_calls', '/stats/epsilon',
     }  # fmt: skip
     assert expected <= entities, expected - entities
-    assert FX.rrd_column(rrd, '/qtree', 'GraphNodes:node_ids') == [['root', 'O1', 'O1,T']]
+    labels = FX.rrd_column(rrd, '/qtree/nodes', 'Points2D:labels')
+    assert labels == [['s_H (episode 3)', 'O1 Q=+0.5', 'T Q=+1.0']]
+    assert len(FX.rrd_column(rrd, '/qtree/edges', 'LineStrips2D:strips')[0]) == 2
     assert FX.rrd_column(rrd, '/stats/q_bar', 'Scalars:scalars') == [[1.5]]
     colors = FX.rrd_column(rrd, '/scene/objects/O1', 'Cylinders3D:colors')
     assert colors and colors[-1][0] != FX.rrd_column(rrd, '/scene/objects/T',

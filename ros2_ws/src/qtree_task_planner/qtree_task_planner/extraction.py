@@ -52,36 +52,61 @@ def extract_sequence(tree: QTree) -> tuple[str, ...]:
     return tuple(edge.action for edge in path)
 
 
+EXTRACTION_EQ19 = 'eq19'
+EXTRACTION_FALLBACK = 'best-known-fallback'
+EXTRACTION_NONE = 'none'
+
+
+def extract(tree: QTree) -> tuple[tuple[str, ...], str]:
+    """The learned sequence and how it was found: eq. (19), else the best known sequence.
+
+    Eq. (19) can return nothing although episodes reached the target: for the paper's policies
+    the reward of the target propagates one edge per revisit, so after a short training the root
+    edges may all still hold 0 and the greedy walk (ties: first edge) ends in a dead branch. Then
+    the best explored target-reaching sequence (:func:`best_known_sequence`) is returned,
+    labelled ``'best-known-fallback'``.
+
+    Returns:
+        (sequence, method): method is ``'eq19'``, ``'best-known-fallback'`` or ``'none'``
+        (``sequence == ()``: no explored sequence reaches the target).
+    """
+    sequence = extract_sequence(tree)
+    if sequence:
+        return sequence, EXTRACTION_EQ19
+    sequence = best_known_sequence(tree)
+    return sequence, EXTRACTION_FALLBACK if sequence else EXTRACTION_NONE
+
+
+def path_of(tree: QTree, sequence: tuple[str, ...]) -> list[Edge]:
+    """The edges that ``sequence`` walks from the root (stops where the tree has no such edge)."""
+    path: list[Edge] = []
+    key: NodeKey = ()
+    for action in sequence:
+        if key not in tree:
+            break
+        edge = tree.node(key).children.get(action)
+        if edge is None:
+            break
+        path.append(edge)
+        key = edge.child
+    return path
+
+
 def best_known_sequence(tree: QTree) -> tuple[str, ...]:
     """Eq. (19) on the steady-state values of what the tree knows, without modifying it.
 
-    Computes, deepest node first, V(s) = max_a [r + gamma V(s')] over the explored edges (the
-    values :meth:`QTree.sweep` would write, optimism ignored), then walks greedily from the root.
+    Follows, from the root, the edge maximising r + gamma V(s') with V(s) = max_a [r + gamma V(s')]
+    over the explored edges (the values :meth:`QTree.sweep` would write, optimism ignored; ties to
+    the earliest-created edge). The tree keeps these values up to date as edges are added
+    (:meth:`QTree.known_choice`), so this is O(depth), not a sort of every node per episode.
     Used for the per-episode best sequence of H-EG-SET, whose Q values are optimistic.
 
     Returns:
         The best explored sequence ending with a feasible target edge, or ``()``.
     """
-    gamma = tree.gamma
-    value: dict[NodeKey, float] = {}
-    choice: dict[NodeKey, Edge] = {}
-    for node in sorted(tree.nodes(), key=lambda n: n.depth, reverse=True):
-        best: Edge | None = None
-        best_value = 0.0
-        for edge in node.children.values():
-            if edge.feasible and edge.action != tree.target_id:
-                q = edge.reward + gamma * value.get(edge.child, 0.0)
-            else:
-                q = edge.reward
-            if best is None or q > best_value:
-                best, best_value = edge, q
-        value[node.key] = best_value
-        if best is not None:
-            choice[node.key] = best
     sequence: list[str] = []
     key: NodeKey = ()
-    while key in choice:
-        edge = choice[key]
+    while (edge := tree.known_choice(key)) is not None:
         sequence.append(edge.action)
         if edge.action == tree.target_id:
             return tuple(sequence) if edge.feasible else ()
