@@ -1,8 +1,16 @@
 """The motion planner: validates a relocation request, samples the Cartesian path, runs the STPIK
 check and caches the answer (paper Sect. 3.1, Figure 2). No ROS import.
 
-With Assumption 2 the objects already relocated are simply removed from the scene, so a check
-depends only on ``(frozenset(relocated_ids), object_id)`` (see :mod:`.cache`).
+Relocated objects leave the clutter and stand in the drop slots of :mod:`qtree_scene.placement`
+(the k-th relocation uses slot k, the simulator stands them there too). A check for object o
+after the set R plans against: the objects not in R ∪ {o} at their initial poses, and one
+conservative envelope per occupied slot 0 … |R|−1 (largest radius and height over R, plus
+:data:`ENVELOPE_MARGIN_M`). Both depend on the SET R only, never on the order R was relocated
+in, so the answer keyed on ``(frozenset(R), o)`` in :mod:`.cache` stays valid (Assumption 2,
+made true by construction; slot k's placement never touches slots < k, see
+:func:`qtree_scene.placement.drop_slots`). Every trajectory returned has passed the independent
+:class:`~.verifier.TrajectoryVerifier` against that scene; a rejection is a planner defect and
+is answered ``VERIFICATION_FAILED`` / ``CARRIED_COLLISION``, never returned.
 """
 
 from __future__ import annotations
@@ -16,6 +24,12 @@ import numpy as np
 import pinocchio as pin
 from jaco2_description.model import Jaco2Model
 from ompl import util as ou
+from qtree_scene.placement import (
+    PLACEMENT_TOLERANCE_M,
+    drop_slots,
+    occupied_envelopes,
+    slot_position,
+)
 from qtree_scene.scene import ObjectSpec, Scenario
 
 from stpik_motion_planner.cache import FeasibilityCache
@@ -33,16 +47,28 @@ from stpik_motion_planner.exceptions import (
     InvalidRequest,
     MotionPlannerError,
     NoCartesianPath,
+    NoPlacement,
+    ObjectTooBig,
     PlanningTimeout,
+    SceneCollision,
+    SelfCollision,
+    VerificationFailed,
 )
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.scene_checks import validate_request, validate_scenario
 from stpik_motion_planner.stpik import Stpik
+from stpik_motion_planner.verifier import Carried, TrajectoryVerifier
 
 HAND_BELOW_EE_M = 0.06  # lowest point of the hand below the EE origin in a side grasp [m]
 HAND_HALF_HEIGHT_M = 0.0525  # half the hand's extent across the approach axis [m]
 CARRY_MIN_Z_M = 0.3  # lowest EE height of the carry transit [m]
 MIN_SEGMENT_S = 0.05  # shortest time between two trajectory samples [s]
+# The simulator stands placed objects on their slot (qtree_scene.placement.settle_pose) [m].
+ENVELOPE_MARGIN_M = PLACEMENT_TOLERANCE_M
+# Widest object the open hand closes on: inner faces of the open fingertips are ±0.046 m from the
+# EE origin (URDF, fingers at 0.2 rad), minus 5 mm clearance on each side [m].
+HAND_OPENING_M = 0.082
+HOVER_M = 0.12  # height above the pre-grasp of the descent when the joint line is blocked [m]
 _OMPL_SEEDED: list[int] = []
 
 
@@ -72,6 +98,7 @@ class MotionPlanner:
         self.config = config if config is not None else PlannerConfig()
         self.robot = model if model is not None else Jaco2Model()
         self.stpik = Stpik(self.robot, self.config)
+        self.verifier = TrajectoryVerifier(self.robot)
         self.cache = FeasibilityCache()
         self.home_q = np.asarray(scenario.home, dtype=float)
         self.home_pose = pin.SE3(self.robot.ee_pose(self.home_q))
@@ -109,35 +136,40 @@ class MotionPlanner:
         return None
 
     def slot_position(self, index: int, obj: ObjectSpec) -> np.ndarray:
-        """Centre [m] (3,) of ``obj`` standing in drop-zone slot ``index`` (grid, wraps)."""
-        centre = np.asarray(self.scenario.drop_zone_center, dtype=float)
-        size = np.asarray(self.scenario.drop_zone_size, dtype=float)
-        spacing = self.config.slot_spacing_m
-        nx = max(1, int(size[0] // spacing))
-        ny = max(1, int(size[1] // spacing))
-        i, j = divmod(index % (nx * ny), ny)
-        x = centre[0] + (i - (nx - 1) / 2) * spacing
-        y = centre[1] + (j - (ny - 1) / 2) * spacing
-        half = obj.height / 2 if obj.shape == 'cylinder' else obj.size[2] / 2
-        return np.array([x, y, centre[2] - size[2] / 2 + half])
+        """Centre [m] (3,) of ``obj`` standing in drop slot ``index`` (qtree_scene.placement)."""
+        return slot_position(self.scenario, index, obj)
+
+    def planning_scene(self, object_id: str, relocated: Iterable[str]) -> list[ObjectSpec]:
+        """Bodies standing while ``object_id`` is relocated after the set ``relocated``.
+
+        The objects not relocated (initial poses, statics included; not ``object_id``) and one
+        envelope per occupied drop slot (:func:`qtree_scene.placement.occupied_envelopes`).
+        """
+        removed = set(relocated) | {object_id}
+        standing = [o for o in self.scenario.objects if o.id not in removed]
+        return standing + occupied_envelopes(self.scenario, set(relocated), ENVELOPE_MARGIN_M)
 
     def plan(self, object_id: str, relocated: list[str]) -> PlanResult:
         """Plan without the cache (the request must be valid)."""
         c = self.config
         start = time.perf_counter()
         deadline = start + c.time_limit_s
-        timings = {'sampling': 0.0, 'stpik': 0.0, 'collision': 0.0}
+        timings = {'sampling': 0.0, 'stpik': 0.0, 'collision': 0.0, 'verify': 0.0}
         obj = self.scenario.object(object_id)
-        removed = set(relocated) | {object_id}
-        scene = SceneWorld(o for o in self.scenario.objects if o.id not in removed)
+        bad = _unplaceable(self.scenario, obj, len(relocated))
+        if bad is not None:
+            return PlanResult(False, bad.reason, str(bad), planning_time=_since(start))
+        standing = self.planning_scene(object_id, relocated)
+        scene = SceneWorld(standing)
         sampler = CartesianSampler(scene, c)
         slot = self.slot_position(len(relocated), obj)
+        slot_yaw = drop_slots(self.scenario)[len(relocated)].yaw
         centre = np.asarray(obj.position, dtype=float)
         failures: list[MotionPlannerError] = []
         try:
             for yaw in approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad):
                 t0 = time.perf_counter()
-                path = self._sample(sampler, scene, obj, yaw, slot, failures)
+                path = self._sample(sampler, scene, obj, yaw, slot, slot_yaw, failures)
                 timings['sampling'] += time.perf_counter() - t0
                 if path is None:
                     continue
@@ -149,6 +181,19 @@ class MotionPlanner:
                     raise
                 except MotionPlannerError as err:
                     failures.append(err)
+                    continue
+                t0 = time.perf_counter()
+                report = self.verifier.verify(
+                    trajectory, standing, Carried(obj, grasp_index, release_index)
+                )
+                timings['verify'] += time.perf_counter() - t0
+                if not report.ok:
+                    carried = any('carried' in (v.name_a, v.name_b) for v in report.violations)
+                    failures.append(
+                        VerificationFailed(
+                            f'yaw {path.approach_yaw:.2f} rad: {report.summary()}', carried
+                        )
+                    )
                     continue
                 return self._success(path, trajectory, grasp_index, release_index, start, timings)
             if time.perf_counter() > deadline:
@@ -169,6 +214,7 @@ class MotionPlanner:
         obj: ObjectSpec,
         yaw: float,
         slot: np.ndarray,
+        slot_yaw: float,
         failures: list,
     ) -> CartesianPath | None:
         c = self.config
@@ -204,8 +250,7 @@ class MotionPlanner:
         slot = slot + np.r_[0.0, 0.0, grasp_z - centre[2]]  # EE height at release
         step_m, step_rad = c.step_m, c.step_rad
         options = []
-        azimuth = math.atan2(slot[1], slot[0])
-        for place_yaw in (azimuth, azimuth + math.pi / 2, azimuth - math.pi / 2):
+        for place_yaw in (slot_yaw, slot_yaw + math.pi / 2, slot_yaw - math.pi / 2):
             place_rotation = grasp_rotation(place_yaw)
             above = pin.SE3(place_rotation, np.r_[slot[:2], max(carry_z, CARRY_MIN_Z_M)])
             place = pin.SE3(place_rotation, slot)
@@ -250,12 +295,15 @@ class MotionPlanner:
 
         try:
             seed = stpik.ready_posture(path.pregrasp.translation, self.home_q[0])
-            q_pre = stpik.converge(seed, path.pregrasp, scene, deadline=deadline)
+            # Until the grasp the object itself stands in the way of the arm.
+            with_obj = SceneWorld([*scene.objects.values(), obj])
+            q_pre = stpik.converge(seed, path.pregrasp, with_obj, deadline=deadline)
             phase = 'transit to pre-grasp'
-            to_pre = stpik.transit(self.home_q, q_pre, scene, deadline)
+            to_pre = self._transit_to_pregrasp(q_pre, path.pregrasp, with_obj, deadline)
             phase = 'approach'
+            # Tight on every sample: the open fingertips pass 20 mm from the object (verifier).
             approach = stpik.track(
-                q_pre, path.approach, scene, loose_then_tight(len(path.approach)), deadline
+                q_pre, path.approach, scene, [True] * len(path.approach), deadline
             )
             world_obj = pin.SE3(
                 pin.rpy.rpyToMatrix(0.0, 0.0, obj.yaw), np.asarray(obj.position, dtype=float)
@@ -290,8 +338,10 @@ class MotionPlanner:
                 place[-1], retreat_leg, scene, [False] * len(retreat_leg), deadline
             )
             phase = 'return home'
+            placed = dataclasses.replace(obj, position=tuple(place_leg[-1].translation), yaw=0.0)
+            after = SceneWorld([*scene.objects.values(), placed])
             retreat = np.vstack(
-                [retreat, stpik.transit(retreat[-1], self.home_q, scene, deadline)]
+                [retreat, stpik.transit(retreat[-1], self.home_q, after, deadline)]
             )
         except MotionPlannerError as err:
             err.args = (f'{phase} at yaw {path.approach_yaw:.2f} rad: {err}',)
@@ -304,6 +354,25 @@ class MotionPlanner:
         grasp_index = sum(len(p) for p in parts[:3]) - 1
         release_index = sum(len(p) for p in parts) - 1
         return np.vstack([*parts, retreat]), grasp_index, release_index
+
+    def _transit_to_pregrasp(
+        self, q_pre: np.ndarray, pregrasp: pin.SE3, scene: SceneWorld, deadline: float
+    ) -> np.ndarray:
+        """Home → pre-grasp: a joint line, else a joint line to a pose above it and a descent.
+
+        The descent (:data:`HOVER_M`, Cartesian, STPIK) keeps the hand off the object whose top
+        a joint line swinging down onto the pre-grasp can clip.
+        """
+        stpik = self.stpik
+        try:
+            return stpik.transit(self.home_q, q_pre, scene, deadline)
+        except (SceneCollision, SelfCollision):
+            hover = pin.SE3(pregrasp.rotation, pregrasp.translation + np.r_[0.0, 0.0, HOVER_M])
+            q_hover = stpik.converge(q_pre, hover, scene, deadline=deadline)
+            down = interpolate(hover, pregrasp, self.config.step_m, self.config.step_rad)
+            to_hover = stpik.transit(self.home_q, q_hover, scene, deadline)
+            descent = stpik.track(q_hover, down, scene, [True] * len(down), deadline)
+            return np.vstack([to_hover, descent])
 
     def _success(
         self,
@@ -337,8 +406,28 @@ def _since(start: float) -> float:
     return time.perf_counter() - start
 
 
+def _unplaceable(scenario: Scenario, obj: ObjectSpec, index: int) -> MotionPlannerError | None:
+    """NO_PLACEMENT / OBJECT_TOO_BIG before any planning, else None."""
+    slots = drop_slots(scenario)
+    if index >= len(slots):
+        return NoPlacement(
+            f'no free drop slot for {obj.id!r}: relocation {index + 1} of a scene with room '
+            f'for {len(slots)} (qtree_scene.placement.drop_slots)'
+        )
+    width = 2 * obj.radius if obj.shape == 'cylinder' else min(obj.size[0], obj.size[1])
+    if width > HAND_OPENING_M:
+        return ObjectTooBig(
+            f'{obj.id!r} is {width * 1000:.0f} mm across, the open hand closes on at most '
+            f'{HAND_OPENING_M * 1000:.0f} mm'
+        )
+    return None
+
+
 def _most_informative(failures: list[MotionPlannerError], object_id: str) -> MotionPlannerError:
-    """The first STPIK failure if any direction reached STPIK, else the first sampling failure."""
+    """A verifier rejection first, else the first STPIK failure, else the first sampling one."""
+    for err in failures:
+        if isinstance(err, VerificationFailed):
+            return err
     for err in failures:
         if not isinstance(err, NoCartesianPath):
             return err

@@ -17,7 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
-from jaco2_description.model import EE_FRAME, Jaco2Model
+from jaco2_description.model import EE_FRAME, Jaco2Model, continuous_joints
 
 from stpik_motion_planner.collision import RobotBodies, SceneWorld
 from stpik_motion_planner.config import PlannerConfig
@@ -98,8 +98,10 @@ class Stpik:
         self.data = self.model.createData()
         self.geometry_model = robot.geometry_model
         self.geometry_data = pin.GeometryData(self.geometry_model)
-        self.lower = np.asarray(robot.limits.lower, dtype=float)
-        self.upper = np.asarray(robot.limits.upper, dtype=float)
+        # Continuous joints (1, 3, 5, 7) have no limit: the model's ±2π is a modelling artefact.
+        free = np.asarray(continuous_joints())
+        self.lower = np.where(free, -np.inf, np.asarray(robot.limits.lower, dtype=float))
+        self.upper = np.where(free, np.inf, np.asarray(robot.limits.upper, dtype=float))
         self.bodies = RobotBodies(self.geometry_model, robot.collision_links)
         self.ee_frame = self.model.getFrameId(EE_FRAME)
         self.body_joint = {
@@ -124,7 +126,7 @@ class Stpik:
         reference = READY.copy()
         turned = READY[0] - math.atan2(position[1], position[0])
         turned += 2 * math.pi * round((q1 - turned) / (2 * math.pi))
-        reference[0] = min(max(turned, self.lower[0]), self.upper[0])
+        reference[0] = turned
         return reference
 
     def reset_timers(self) -> None:
