@@ -110,8 +110,9 @@ class NodeProcess:
         return self.process.poll() is None
 
     def log_text(self) -> str:
-        """Everything the node has written to stdout and stderr so far."""
-        self._log.flush()
+        """Everything the node wrote to stdout and stderr so far (also after :meth:`stop`)."""
+        if not self._log.closed:
+            self._log.flush()
         return self.log_path.read_text(errors='replace')
 
     def wait_for_log(self, text: str, timeout_s: float = 20.0) -> None:
@@ -134,10 +135,10 @@ class NodeProcess:
             f'{self.name} did not print {text!r} within {timeout_s} s:\n{self.log_text()[-3000:]}'
         )
 
-    def stop(self, timeout_s: float = 10.0) -> int:
-        """Send SIGINT (like Ctrl-C), then SIGKILL after ``timeout_s``; return the exit code."""
+    def stop(self, timeout_s: float = 10.0, sig: int = signal.SIGINT) -> int:
+        """Send ``sig`` (SIGINT: Ctrl-C), SIGKILL after ``timeout_s``; return the exit code."""
         if self.alive():
-            self.process.send_signal(signal.SIGINT)
+            self.process.send_signal(sig)
             try:
                 self.process.wait(timeout_s)
             except subprocess.TimeoutExpired:

@@ -47,7 +47,7 @@ def launch(ros_domain: int, tmp_path: Path) -> Iterator[Callable[..., NodeProces
     for node in reversed(nodes):
         was_alive = node.alive()
         code = node.stop()
-        if was_alive and code != 0:
+        if was_alive and code != 0:  # log_text() still reads the (closed) log: last lines
             failures.append(f'{node.name} exited with {code}:\n{node.log_text()[-2000:]}')
     assert not failures, '\n'.join(failures)
 
@@ -83,8 +83,27 @@ def ros_node(ros_domain: int) -> Iterator[Any]:
         assert spin_until(future.done, timeout_s), f'{client.srv_name}: no answer in {timeout_s} s'
         return future.result()
 
+    def wait_matched(*entities: Any, timeout_s: float = 30.0) -> None:
+        """Spin until every publisher has a subscriber, every subscription a publisher and every
+        service client its server (Fast DDS needs 2-3 s to discover a participant; anything
+        published or sent before the match is lost: the QoS is volatile)."""
+
+        def matched(entity: Any) -> bool:
+            if hasattr(entity, 'get_subscription_count'):
+                return entity.get_subscription_count() > 0
+            if hasattr(entity, 'get_publisher_count'):
+                return entity.get_publisher_count() > 0
+            if hasattr(entity, 'server_is_ready'):
+                return entity.server_is_ready()
+            return entity.service_is_ready()
+
+        names = [getattr(e, 'topic_name', None) or getattr(e, 'srv_name', e) for e in entities]
+        ok = spin_until(lambda: all(matched(e) for e in entities), timeout_s)
+        assert ok, f'not matched within {timeout_s} s: {names}'
+
     node.spin_until = spin_until
     node.call = call
+    node.wait_matched = wait_matched
     node.executor_ = executor
     yield node
     executor.shutdown()

@@ -210,6 +210,7 @@ def test_long_trajectory(graph: Limits, n: int) -> None:
     before = rss_mb(graph.sim.process.pid)
     mark = len(graph.sim.log_text())
     count = len(graph.state_times)
+    assert graph.spin_until(lambda: graph.trajectory_pub.get_subscription_count() > 0, 20.0)
     start = time.monotonic()
     graph.trajectory_pub.publish(msg)
     # documented limit: sim_node's max_trajectory_points (default 10 000); longer is rejected

@@ -32,10 +32,11 @@ def graph(launch, ros_node):
         durability=DurabilityPolicy.TRANSIENT_LOCAL,
     )
     ros_node.create_subscription(Scene, '/scene', lambda m: state.update(scene=m), qos)
-    ros_node.create_subscription(
+    events = ros_node.create_subscription(
         PlanningEvent, '/motion_planner/events', lambda m: state['events'].append(m), 10
     )
     client = ros_node.create_client(RelocateObject, '/relocate_object')
+    ros_node.wait_matched(client, events)  # a request sent before the match is lost
     return ros_node, client, state, planner
 
 
@@ -89,6 +90,7 @@ def test_execute_relocates_the_object_in_the_sim(graph):
 
 def test_bad_requests_do_not_wait_for_planning(graph):
     node, client, _, planner = graph
+    assert client.wait_for_service(timeout_sec=30.0)  # was missing: requests were lost (#18)
     planning = [('O1', []), ('O2', []), ('O3', []), ('O4', []), ('O5', [])]
     planning.append(('T', ['O1', 'O2', 'O3', 'O4', 'O5']))
     futures = [

@@ -81,7 +81,9 @@ def test_real_run_reads_everywhere(launch: Any, ros_node: Any, tmp_path: Path) -
     assert ros_node.spin_until(lambda: bool(states), 20.0)
     recorder.wait_for_log('recording /joint_trajectory ', timeout_s=20.0)
     recorder.wait_for_log('recording /training_stats ', timeout_s=20.0)
-    ros_node.spin_until(lambda: False, 0.3)  # let the recorder's subscriptions match
+    # sim and recorder subscribed to /joint_trajectory, recorder to /training_stats
+    assert ros_node.spin_until(lambda: trajectory_pub.get_subscription_count() >= 2, 20.0)
+    ros_node.wait_matched(stats_pub)
     goal = states[-1] + DELTA
     point = JointTrajectoryPoint(positions=[float(v) for v in goal])
     point.time_from_start.sec, point.time_from_start.nanosec = 1, int((MOVE_S - 1) * 1e9)

@@ -62,9 +62,12 @@ class GoalRunner:
         self.stats: list[Any] = []
         self.trees: list[Any] = []
         self.feedback: list[Any] = []
-        ros_node.create_subscription(TrainingStats, '/training_stats', self.stats.append, 1000)
+        stats = ros_node.create_subscription(
+            TrainingStats, '/training_stats', self.stats.append, 1000
+        )
         ros_node.create_subscription(QTree, '/qtree', self.trees.append, latched)
         assert self.client.wait_for_server(timeout_sec=30.0), '/retrieve_target not available'
+        ros_node.wait_matched(stats)  # every episode's /training_stats is counted
 
     def send(self, **fields: Any) -> Any:
         future = self.client.send_goal_async(

@@ -17,10 +17,9 @@ import time
 from datetime import datetime
 from pathlib import Path
 
-import rclpy
 from qtree_msgs.msg import Scene
+from qtree_node_support.lifecycle import run_node
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
@@ -207,16 +206,8 @@ class RecorderNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    rclpy.init(args=args)
-    node = RecorderNode()
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.finish()
-        node.destroy_node()
-        rclpy.try_shutdown()
+    """Record until SIGINT/SIGTERM, finish the file, exit 0."""
+    sys.exit(run_node(RecorderNode, args=args, cleanup=RecorderNode.finish))
 
 
 if __name__ == '__main__':

@@ -15,17 +15,19 @@ once per episode); an execution step failing -> EXECUTION_FAILED.
 
 from __future__ import annotations
 
+import sys
 import threading
 
-import rclpy
 from qtree_msgs.action import RetrieveTarget
 from qtree_msgs.msg import QTree as QTreeMsg
 from qtree_msgs.msg import Scene, TrainingStats
 from qtree_msgs.srv import RelocateObject
+from qtree_node_support.lifecycle import run_node
+from qtree_node_support.qos import SERVICE_QOS, action_server_qos
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.action import ActionServer, CancelResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -80,7 +82,7 @@ class TaskPlannerNode(Node):
         self._stats_pub = self.create_publisher(TrainingStats, '/training_stats', STATS_QOS)
         self._tree_pub = self.create_publisher(QTreeMsg, '/qtree', LATCHED_QOS)
         self._planner = self.create_client(
-            RelocateObject, '/relocate_object', callback_group=self._group
+            RelocateObject, '/relocate_object', qos_profile=SERVICE_QOS, callback_group=self._group
         )
         self._server = ActionServer(
             self,
@@ -89,6 +91,7 @@ class TaskPlannerNode(Node):
             execute_callback=self._execute,
             cancel_callback=lambda _: CancelResponse.ACCEPT,
             callback_group=self._group,
+            **action_server_qos(),
         )
         self.get_logger().info('task planner ready: action /retrieve_target')
 
@@ -205,19 +208,10 @@ class TaskPlannerNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    """Run the node until Ctrl-C (exit code 0)."""
-    rclpy.init(args=args)
-    node = TaskPlannerNode()
-    executor = MultiThreadedExecutor(num_threads=4)
-    executor.add_node(node)
-    try:
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.stopping.set()  # end a running training so its executor thread can finish
-        node.destroy_node()
-        rclpy.try_shutdown()
+    """Run the node until SIGINT/SIGTERM (exit code 0); a running training ends at once."""
+    executor = lambda context: MultiThreadedExecutor(4, context=context)  # noqa: E731
+    cleanup = lambda node: node.stopping.set()  # noqa: E731 - frees the training's thread
+    sys.exit(run_node(TaskPlannerNode, args=args, make_executor=executor, cleanup=cleanup))
 
 
 if __name__ == '__main__':

@@ -17,6 +17,7 @@ import numpy as np
 from jaco2_description.model import ARM_JOINTS
 from qtree_msgs.msg import ObjectState
 from qtree_msgs.srv import AttachObject
+from qtree_node_support.qos import SERVICE_QOS
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
@@ -58,6 +59,7 @@ class TrajectoryExecution:
         self._attach = node.create_client(
             AttachObject,
             '/jaco2_sim/attach_object',
+            qos_profile=SERVICE_QOS,
             callback_group=MutuallyExclusiveCallbackGroup(),
         )
 

@@ -28,15 +28,19 @@ Limits and timing of a request:
 from __future__ import annotations
 
 import dataclasses
+import sys
 import threading
 import time
 
-import rclpy
-from qtree_msgs.msg import ObjectState, PlanningEvent, Scene
+from qtree_msgs.msg import PlanningEvent, Scene
 from qtree_msgs.srv import RelocateObject
+from qtree_node_support.lifecycle import run_node
+from qtree_node_support.qos import SERVICE_QOS
+from qtree_scene.message import scenario_from_msg
+from qtree_scene.scene import ObjectSpec
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -46,7 +50,6 @@ from stpik_motion_planner.conversions import (
     fill_relocate_response,
     planning_event_msg,
     range_descriptor,
-    scenario_from_msg,
 )
 from stpik_motion_planner.exceptions import MotionPlannerError
 from stpik_motion_planner.execution import TrajectoryExecution
@@ -103,7 +106,7 @@ class MotionPlannerNode(Node):
         self._planner: MotionPlanner | None = None
         self._scene_error = ''
         self._geometry: tuple | None = None
-        self._original: dict[str, tuple[float, float, float]] = {}
+        self._original: dict[str, ObjectSpec] = {}  # objects as last seen IN_CLUTTER
         # Own groups, so that waiting requests never hold back the state, scene or attach answer.
         self.create_subscription(
             Scene,
@@ -118,6 +121,7 @@ class MotionPlannerNode(Node):
             RelocateObject,
             '/relocate_object',
             self._on_relocate,
+            qos_profile=SERVICE_QOS,  # a burst of requests is queued, never dropped (#18)
             callback_group=ReentrantCallbackGroup(),
         )
         self.get_logger().info('motion_planner ready: serving /relocate_object')
@@ -149,10 +153,6 @@ class MotionPlannerNode(Node):
             self._rebuild(msg)
 
     def _rebuild(self, msg: Scene) -> None:
-        for o in msg.objects:
-            if o.status == ObjectState.STATUS_IN_CLUTTER or o.id not in self._original:
-                p = o.pose.position
-                self._original.setdefault(o.id, (p.x, p.y, p.z))
         try:
             scenario = scenario_from_msg(msg, original=self._original)
             geometry = (scenario.name, scenario.objects, scenario.drop_zone_center)
@@ -165,8 +165,9 @@ class MotionPlannerNode(Node):
             self.get_logger().warning(f'scene rejected: {err}')
         with self._lock:
             self._planner, self._geometry = planner, geometry
-        self._original = {o.id: o.position for o in scenario.objects} if planner else {}
-        self.get_logger().info(f'scene {msg.scenario_name!r}: planner rebuilt')
+        self._original = {o.id: o for o in scenario.objects} if planner else {}
+        if planner is not None:
+            self.get_logger().info(f'scene {msg.scenario_name!r}: planner rebuilt')
 
     def _on_relocate(self, request, response):
         received = time.monotonic()
@@ -243,18 +244,9 @@ class MotionPlannerNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    """Run the node until Ctrl-C."""
-    rclpy.init(args=args)
-    node = MotionPlannerNode()
-    executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
-    executor.add_node(node)
-    try:
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    """Run the node until SIGINT/SIGTERM (exit code 0)."""
+    executor = lambda context: MultiThreadedExecutor(EXECUTOR_THREADS, context=context)  # noqa: E731
+    sys.exit(run_node(MotionPlannerNode, args=args, make_executor=executor))
 
 
 if __name__ == '__main__':

@@ -1,0 +1,73 @@
+"""run_node against the shutdown race of rclpy: a node publishing at 1 kHz, its context shut down
+from another thread (what rclpy's SIGINT/SIGTERM handler does) always gives exit code 0."""
+
+from __future__ import annotations
+
+import threading
+
+import pytest
+import rclpy
+from qtree_node_support.lifecycle import run_node
+from rclpy.context import Context
+from rclpy.executors import MultiThreadedExecutor
+from std_msgs.msg import String
+
+
+def _busy_node(context: Context, name: str, stop_after_s: float):
+    """A node whose 1 kHz timer publishes, and a subscription: many chances to meet the race.
+
+    Its context is shut down from another thread ``stop_after_s`` [s] after it is built."""
+    node = rclpy.create_node(name, context=context)
+    pub = node.create_publisher(String, 'chatter', 10)
+    node.create_subscription(String, 'chatter', lambda _: None, 10)
+    node.create_timer(0.001, lambda: pub.publish(String(data='x' * 100)))
+    _shutdown_later(context, stop_after_s)
+    return node
+
+
+def _shutdown_later(context: Context, delay_s: float) -> None:
+    thread = threading.Thread(target=lambda: (threading.Event().wait(delay_s), context.shutdown()))
+    thread.start()
+
+
+@pytest.mark.parametrize('threads', [1, 4], ids=['single-threaded', 'multi-threaded'])
+def test_shutdown_from_another_thread_always_exits_0(threads: int) -> None:
+    cleaned: list[str] = []
+    for i in range(15):
+        context = Context()
+        make_executor = (
+            None if threads == 1 else (lambda c: MultiThreadedExecutor(threads, context=c))
+        )
+        code = run_node(
+            lambda c=context, i=i: _busy_node(c, f'busy_{threads}_{i}', 0.05 + 0.013 * i),
+            make_executor=make_executor,
+            cleanup=lambda node: cleaned.append(node.get_name()),
+            context=context,
+        )
+        assert code == 0
+        assert not context.ok()
+    assert len(cleaned) == 15
+
+
+def test_an_error_while_running_is_not_hidden() -> None:
+    context = Context()
+
+    def broken(c=context):
+        node = rclpy.create_node('broken', context=c)
+
+        def fail() -> None:
+            raise ZeroDivisionError('a real bug')
+
+        node.create_timer(0.01, fail)
+        return node
+
+    with pytest.raises(ZeroDivisionError, match='a real bug'):
+        run_node(broken, context=context)
+    assert not context.ok()  # shut down on the way out all the same
+
+
+def test_startup_error_gives_exit_code_2() -> None:
+    def bad_start():
+        raise ValueError('scenario: no such scenario')
+
+    assert run_node(bad_start, startup_errors=(ValueError,), context=Context()) == 2
