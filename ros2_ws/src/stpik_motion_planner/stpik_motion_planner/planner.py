@@ -142,34 +142,53 @@ class MotionPlanner:
         """Centre [m] (3,) of ``obj`` standing in drop slot ``index`` (qtree_scene.placement)."""
         return slot_position(self.scenario, index, obj)
 
-    def planning_scene(self, object_id: str, relocated: Iterable[str]) -> list[ObjectSpec]:
+    def planning_scene(
+        self, object_id: str, relocated: Iterable[str], envelopes: bool = True
+    ) -> list[ObjectSpec]:
         """Bodies standing while ``object_id`` is relocated after the set ``relocated``.
 
-        The objects not relocated (initial poses, statics included; not ``object_id``) and one
-        envelope per occupied drop slot (:func:`qtree_scene.placement.occupied_envelopes`).
+        The objects not relocated (initial poses, statics included; not ``object_id``) and, with
+        ``envelopes``, one envelope per occupied drop slot
+        (:func:`qtree_scene.placement.occupied_envelopes`).
         """
-        removed = set(relocated) | {object_id}
+        relocated = set(relocated)
+        removed = relocated | {object_id}
         standing = [o for o in self.scenario.objects if o.id not in removed]
-        return standing + occupied_envelopes(self.scenario, set(relocated), ENVELOPE_MARGIN_M)
+        if not envelopes:
+            return standing
+        return standing + occupied_envelopes(self.scenario, relocated, ENVELOPE_MARGIN_M)
 
     def plan(
-        self, object_id: str, relocated: list[str], yaws: Sequence[float] | None = None
+        self,
+        object_id: str,
+        relocated: list[str],
+        yaws: Sequence[float] | None = None,
+        slot_index: int | None = None,
     ) -> PlanResult:
-        """Plan without the cache (the request must be valid); ``yaws`` [rad] overrides the
-        candidate approach yaws."""
+        """Plan without the cache (the request must be valid).
+
+        Args:
+            object_id: the object to relocate.
+            relocated: the objects already relocated (gone from the clutter).
+            yaws: candidate approach yaws [rad] (default: the planner's own).
+            slot_index: drop slot to place in with no placed objects standing (the blocker
+                sweeps of :mod:`.blockers`); default: slot ``len(relocated)`` with the occupied
+                slots 0 … len(relocated)−1 standing as envelopes.
+        """
         c = self.config
         start = time.perf_counter()
         deadline = start + c.time_limit_s
         timings = {'sampling': 0.0, 'stpik': 0.0, 'collision': 0.0, 'verify': 0.0}
         obj = self.scenario.object(object_id)
-        bad = _unplaceable(self.scenario, obj, len(relocated))
+        index = len(relocated) if slot_index is None else slot_index
+        bad = _unplaceable(self.scenario, obj, index)
         if bad is not None:
             return PlanResult(False, bad.reason, str(bad), planning_time=_since(start))
-        standing = self.planning_scene(object_id, relocated)
+        standing = self.planning_scene(object_id, relocated, envelopes=slot_index is None)
         scene = SceneWorld(standing)
         sampler = CartesianSampler(scene, c)
-        slot = self.slot_position(len(relocated), obj)
-        slot_yaw = drop_slots(self.scenario)[len(relocated)].yaw
+        slot = self.slot_position(index, obj)
+        slot_yaw = drop_slots(self.scenario)[index].yaw
         centre = np.asarray(obj.position, dtype=float)
         failures: list[MotionPlannerError] = []
         try:
