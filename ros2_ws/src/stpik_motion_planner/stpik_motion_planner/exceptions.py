@@ -49,13 +49,15 @@ class IkNotConverged(MotionPlannerError):  # noqa: N818
 
     reason = Reason.IK_NOT_CONVERGED
 
-    def __init__(self, sample: int, residual_m: float, residual_rad: float) -> None:
+    def __init__(
+        self, sample: int, residual_m: float, residual_rad: float, detail: str = ''
+    ) -> None:
         self.sample = sample
         self.residual_m = residual_m
         self.residual_rad = residual_rad
         super().__init__(
             f'tracking error at sample {sample}: {residual_m * 1000:.1f} mm, '
-            f'{residual_rad:.3f} rad'
+            f'{residual_rad:.3f} rad' + (f' ({detail})' if detail else '')
         )
 
 

@@ -46,6 +46,7 @@ from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import (
     InvalidRequest,
+    JointLimitViolated,
     MotionPlannerError,
     NoCartesianPath,
     NoPlacement,
@@ -325,6 +326,7 @@ class MotionPlanner:
             # Until the grasp the object itself stands in the way of the arm.
             with_obj = SceneWorld([*scene.objects.values(), obj])
             q_pre = stpik.converge(seed, path.pregrasp, with_obj, deadline=deadline)
+            _outside_limit_band(q_pre, stpik, self.config.joint_limit_activation_rad)
             phase = 'transit to pre-grasp'
             to_pre = self._transit_to_pregrasp(q_pre, path.pregrasp, with_obj, deadline)
             phase = 'approach'
@@ -338,7 +340,7 @@ class MotionPlanner:
             stpik.bodies.attach(
                 obj,
                 path.approach[-1].actInv(world_obj),
-                settle_m=self.config.obstacle_min_distance_m + 0.002,
+                settle_m=self.config.obstacle_activation_m + 0.002,  # set down: rows inactive
             )
             phase = 'lift'
             lift = stpik.track(approach[-1], path.lift, scene, [False] * len(path.lift), deadline)
@@ -431,6 +433,20 @@ class MotionPlanner:
 
 def _since(start: float) -> float:
     return time.perf_counter() - start
+
+
+def _outside_limit_band(q: np.ndarray, stpik: Stpik, band: float) -> None:
+    """Refuse a pre-grasp inside the joint-limit activation band (its tracker could not leave).
+
+    Raises:
+        JointLimitViolated: a limited joint within ``band`` [rad] of a limit.
+    """
+    margin = np.minimum(q - stpik.lower, stpik.upper - q)
+    j = int(np.argmin(margin))
+    if margin[j] < band:
+        err = JointLimitViolated(j, float(q[j]), stpik.lower[j], stpik.upper[j])
+        err.args = (f'{err} (pre-grasp within the {band:.2f} rad joint-limit activation band)',)
+        raise err
 
 
 def _unplaceable(scenario: Scenario, obj: ObjectSpec, index: int) -> MotionPlannerError | None:
