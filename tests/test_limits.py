@@ -183,7 +183,7 @@ def test_scene_with_200_objects(graph: Limits, tmp_path: Path) -> None:
         sum(times.values()),
     )
     print(f'[limits]   check times [s]: { {k: round(v, 3) for k, v in times.items()} }')
-    assert max(times.values()) < 2.0 + 5.0  # time_limit_s + transport
+    assert max(times.values()) < 5.0 + 5.0  # time_limit_s + transport
     assert growth < RSS_GROWTH_MB
     assert graph.call(graph.reset, ResetScene.Request(scenario='s1'), 30.0)[0].success
     assert graph.spin_until(lambda: len(graph.scene.objects) == 7, 10.0)

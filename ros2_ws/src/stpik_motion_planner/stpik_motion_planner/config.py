@@ -67,7 +67,7 @@ class PlannerConfig:
     step_rad: float = 0.15
     max_iterations: int = 12  # the Cartesian step bound needs more, shorter steps near bodies
     max_joint_step_rad: float = 0.3
-    time_limit_s: float = 2.0
+    time_limit_s: float = 5.0  # verification + Cartesian-bounded steps on a loaded 2-core machine
     sampling_time_s: float = 0.05
     seed: int = 0
     approach_directions: int = 5
