@@ -18,4 +18,4 @@ def test_slot_layout_constants_contain_the_open_hand(robot):
 def test_grasp_opening_is_inside_the_open_fingertips(robot):
     opening = finger_opening(robot)
     assert 0.08 < opening < 0.11
-    assert HAND_OPENING_M <= opening - 0.005
+    assert opening - 0.005 >= HAND_OPENING_M
