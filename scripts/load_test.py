@@ -29,7 +29,7 @@ from typing import Any
 from orchestration import allocate_domain_id, start_node, stop_all
 
 # name -> (request builder label, codes the answer may carry)
-PLANNING_CODES = {0, 201, 202, 203, 204, 205, 301}
+PLANNING_CODES = {0, 201, 202, 203, 204, 205, 301, 303}  # 303: PLANNER_BUSY
 INVALID_CASES = {
     'unknown_object': {101},
     'duplicate_ids': {103},

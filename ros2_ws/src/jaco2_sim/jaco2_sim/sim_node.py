@@ -28,6 +28,7 @@ from qtree_msgs.msg import Scene
 from qtree_msgs.srv import AttachObject, ResetScene, SetScene
 from qtree_node_support.lifecycle import run_node
 from qtree_node_support.qos import SERVICE_QOS
+from qtree_node_support.text import clip, quote
 from qtree_scene.message import parse_scene_msg
 from qtree_scene.scenario import load_scenario
 from qtree_scene.scene import Scenario
@@ -234,27 +235,27 @@ class Jaco2SimNode(Node):
             return response
         except Exception as err:  # a bad file must not kill the node
             response.success = False
-            response.message = f'{name}: unexpected {type(err).__name__}: {err}'
+            response.message = clip(f'{quote(name)}: unexpected {type(err).__name__}: {err}', 1000)
             self.get_logger().error(f'reset_scene failed: {response.message}')
             return response
-        response.success, response.message = True, f'scenario {self.scenario.name} loaded'
+        response.success, response.message = True, f'scenario {quote(self.scenario.name)} loaded'
         return response
 
     def _on_set_scene(self, request: SetScene.Request, response: SetScene.Response):
         try:
             self._install(parse_scene_msg(request.scene))
         except (Jaco2SimError, ModelError, ScenarioError) as err:
-            response.success, response.message = False, str(err)
-            self.get_logger().warning(f'set_scene rejected: {err}')
+            response.success, response.message = False, clip(str(err), 1000)
+            self.get_logger().warning(f'set_scene rejected: {response.message}')
             return response
         except Exception as err:  # a bad message must not kill the node
             response.success = False
-            response.message = f'SetScene: unexpected {type(err).__name__}: {err}'
+            response.message = clip(f'SetScene: unexpected {type(err).__name__}: {err}', 1000)
             self.get_logger().error(f'set_scene failed: {response.message}')
             return response
         response.success = True
         response.message = (
-            f'scene {self.scenario.name!r} set ({len(self.scenario.objects)} objects)'
+            f'scene {quote(self.scenario.name)} set ({len(self.scenario.objects)} objects)'
         )
         return response
 
@@ -264,15 +265,15 @@ class Jaco2SimNode(Node):
                 distance = self.world.attach(request.object_id, self.robot.ee_pose(self.sim.q))
                 if distance > ATTACH_DISTANCE_WARN:
                     self.get_logger().warning(
-                        f'attached {request.object_id} {distance:.3f} m from the EE'
+                        f'attached {quote(request.object_id)} {distance:.3f} m from the EE'
                     )
-                response.message = f'{request.object_id} attached'
+                response.message = f'{quote(request.object_id)} attached'
             else:
                 status = STATUS_NAMES.get(
                     request.status_after_release, f'code {request.status_after_release}'
                 )
                 self.world.detach(request.object_id, status)
-                response.message = f'{request.object_id} released ({status})'
+                response.message = f'{quote(request.object_id)} released ({status})'
         except (Jaco2SimError, ModelError, ScenarioError) as err:
             response.success, response.message = False, str(err)
             return response

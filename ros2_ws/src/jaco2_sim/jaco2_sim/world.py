@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from qtree_node_support.text import quote
 from qtree_scene.placement import settle_pose
 from qtree_scene.scene import ObjectSpec, Scenario, Status
 
@@ -79,7 +80,7 @@ class World:
             return self.objects[object_id]
         except KeyError:
             known = ', '.join(self.objects)
-            raise WorldError(f'unknown object {object_id!r} (known: {known})') from None
+            raise WorldError(f'unknown object {quote(object_id)} (known: {known})') from None
 
     def attach(self, object_id: str, ee_pose: pin.SE3) -> float:
         """Grasp ``object_id``: it keeps its current offset to the end-effector.
@@ -96,9 +97,11 @@ class World:
         """
         state = self.state(object_id)
         if self.attached_id is not None:
-            raise WorldError(f'cannot attach {object_id!r}: {self.attached_id!r} is attached')
+            raise WorldError(
+                f'cannot attach {quote(object_id)}: {quote(self.attached_id)} is attached'
+            )
         if state.spec.role == 'static':
-            raise WorldError(f'cannot attach {object_id!r}: it is a static object')
+            raise WorldError(f'cannot attach {quote(object_id)}: it is a static object')
         self._object_to_ee = ee_pose.actInv(state.pose)
         self.attached_id = object_id
         state.status = 'grasped'
@@ -130,9 +133,11 @@ class World:
         state = self.state(object_id)
         if self.attached_id != object_id:
             held = repr(self.attached_id) if self.attached_id else 'nothing'
-            raise WorldError(f'cannot detach {object_id!r}: it is not attached ({held} is)')
+            raise WorldError(f'cannot detach {quote(object_id)}: it is not attached ({held} is)')
         if status not in RELEASE_STATUSES:
-            raise WorldError(f'release status must be one of {RELEASE_STATUSES}, got {status!r}')
+            raise WorldError(
+                f'release status must be one of {RELEASE_STATUSES}, got {quote(status)}'
+            )
         if status == 'relocated':
             index = sum(other.status == 'relocated' for other in self.objects.values())
             yaw = math.atan2(state.pose.rotation[1, 0], state.pose.rotation[0, 0])

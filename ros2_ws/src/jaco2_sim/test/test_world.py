@@ -97,3 +97,9 @@ def test_relocated_object_released_near_its_slot_stands_upright_on_it(world: Wor
     pose = world.state('O2').pose
     np.testing.assert_allclose(pose.translation, slot, atol=1e-12)
     np.testing.assert_allclose(pose.rotation[:, 2], [0.0, 0.0, 1.0], atol=1e-12)
+
+
+def test_huge_ids_are_quoted_short(world: World) -> None:
+    with pytest.raises(WorldError, match=r"unknown object 'xxxx.*…' \(10000 characters\)") as err:
+        world.attach('x' * 10_000, pin.SE3.Identity())  # was echoed in full (#18)
+    assert len(str(err.value)) < 300

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+from qtree_node_support.text import clip
+
+MAX_SOURCE_CHARS = 300  # longest file path or name quoted in the message [characters]
+
 
 class ScenarioError(ValueError):
     """A scenario file, scene message or generated scenario is invalid.
@@ -16,6 +20,6 @@ class ScenarioError(ValueError):
         self.source = source
         self.field = field
         self.problem = problem
-        where = f'{source}: ' if source else ''
+        where = f'{clip(source, MAX_SOURCE_CHARS)}: ' if source else ''  # a path may be huge
         what = f'{field}: ' if field else ''
         super().__init__(f'{where}{what}{problem}')

@@ -60,6 +60,7 @@ _OBJECT = {'id', 'role', 'shape', 'xy', 'radius', 'height', 'size', 'yaw'}
 _SHAPE_KEYS = {'cylinder': {'radius', 'height'}, 'box': {'size'}}
 _ROLES = ('target', 'obstacle', 'static')
 _MAX_SHOWN = 60  # characters of a bad value quoted in an error message
+MAX_NAME_CHARS = 256  # longest scenario name or object id (= the motion planner's id limit)
 _REPR = reprlib.Repr()
 _REPR.maxlevel, _REPR.maxstring, _REPR.maxother = 3, _MAX_SHOWN, _MAX_SHOWN
 
@@ -346,6 +347,8 @@ def _text(value: Any, field: str, fail: Callable[..., Any]) -> str:
 def _string(value: Any, field: str, fail: Callable[..., Any]) -> str:
     if not _text(value, field, fail).strip():
         fail(field, f'must be a non-empty string, got {_brief(value)}')
+    if len(value) > MAX_NAME_CHARS:  # names and ids are echoed in messages and /scene
+        fail(field, f'at most {MAX_NAME_CHARS} characters, got {len(value)}: {_brief(value)}')
     return value
 
 

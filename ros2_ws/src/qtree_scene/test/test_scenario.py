@@ -247,3 +247,22 @@ def test_load_scenario_bad_files_name_the_file(tmp_path: Any, text: str, problem
 def test_resolve_bad_names(name: Any) -> None:
     with pytest.raises(ScenarioError):
         resolve_scenario(name)
+
+
+@pytest.mark.parametrize('where', ['name', 'id'])
+def test_huge_names_and_ids_are_rejected_shortly(where: str) -> None:
+    def mutate(data: dict[str, Any]) -> None:
+        if where == 'name':
+            data['name'] = 'n' * 10_000
+        else:
+            data['objects'][1]['id'] = 'O' * 10_000
+
+    with pytest.raises(ScenarioError, match='at most 256 characters, got 10000') as err:
+        parse_scenario(_bad(mutate), source='huge.yaml')
+    assert len(str(err.value)) < 200  # a 10 000-character name was echoed in /scene (#18)
+
+
+def test_a_huge_source_is_clipped_in_the_message() -> None:
+    with pytest.raises(ScenarioError) as err:
+        resolve_scenario('/no/such/' + 'd' * 10_000)
+    assert len(str(err.value)) < 500

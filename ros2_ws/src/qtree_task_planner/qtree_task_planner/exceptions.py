@@ -6,6 +6,8 @@ the data that explains it and builds its own message.
 
 from __future__ import annotations
 
+from qtree_node_support.text import quote
+
 
 class QTreeError(Exception):
     """Base class of every error raised by ``qtree_task_planner``."""
@@ -24,7 +26,7 @@ class InvalidParameterError(QTreeError, ValueError):
         self.field = field
         self.value = value
         self.reason = reason
-        super().__init__(f'invalid {field}={value!r}: {reason}')
+        super().__init__(f'invalid {field}={quote(value)}: {reason}')  # a policy may be huge
 
 
 class UnknownPolicyError(InvalidParameterError):

@@ -7,12 +7,15 @@ sees why.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 from qtree_task_planner.exceptions import InvalidParameterError
 from qtree_task_planner.policies import canonical_policy_name
 from qtree_task_planner.training import TrainingConfig
+
+FLOAT_FIELDS = ('alpha', 'gamma', 'epsilon0', 'epsilon_min', 'beta')  # every float64 goal field
 
 
 @dataclass(frozen=True)
@@ -44,6 +47,10 @@ def settings_from_goal(goal: Any) -> GoalSettings:
         InvalidParameterError: the first invalid field (the message names it).
     """
     policy = canonical_policy_name(str(goal.policy))
+    for name in FLOAT_FIELDS:  # NaN and inf pass some range checks (inf > 0): reject them first
+        value = float(getattr(goal, name))
+        if not math.isfinite(value):
+            raise InvalidParameterError(name, value, 'must be a finite number')
     for name in ('epsilon0', 'epsilon_min'):
         value = float(getattr(goal, name))
         if not 0.0 < value <= 1.0:

@@ -2,28 +2,30 @@
 
 :class:`RosPlannerOracle` answers the Q-Tree learner's "can ``object_id`` be relocated after
 ``relocated``?" with one RelocateObject call (execute=false); :func:`wait_for_future` blocks an
-executor thread until another one completes a service call; :func:`execute_sequence` relocates
-a learned sequence on the arm (execute=true).
+executor thread until another one completes a service call (:mod:`.sequence_execution` relocates
+a learned sequence on the arm).
 """
 
 from __future__ import annotations
 
 import threading
 import time
+from typing import Any
 
 import rclpy
 from qtree_msgs.srv import RelocateObject
 
 from qtree_task_planner.exceptions import OracleUnavailableError
+from qtree_task_planner.retry import Backoff
 
 
-def wait_for_future(future: rclpy.task.Future, timeout_s: float, stop: threading.Event) -> bool:
+def wait_for_future(future: rclpy.task.Future, timeout_s: float, stop: Any) -> bool:
     """Block this thread until ``future`` is done (another executor thread completes it).
 
     Args:
         future: the pending service call.
         timeout_s: longest wait [s].
-        stop: set when the node is shutting down; ends the wait at once.
+        stop: anything with ``is_set()`` (an Event): once set, the wait ends at once.
 
     Returns:
         Whether ``future`` is done: False on time-out, or at once when ``stop`` is set.
@@ -40,13 +42,19 @@ def wait_for_future(future: rclpy.task.Future, timeout_s: float, stop: threading
 class RosPlannerOracle:
     """Feasibility oracle over the ``/relocate_object`` service (execute=false).
 
-    Planning failures (reason 2xx) and planner time-outs (3xx) are "cannot relocate" (-1 of
-    eq. 8). Request errors (1xx: unknown object, invalid request, no or invalid scene) are not
-    answers about feasibility: NO_SCENE is retried for ``scene_wait_s``, the others raise.
+    Planning failures (reason 2xx) are "cannot relocate" (-1 of eq. 8). A busy planner
+    (PLANNER_BUSY), a planning time-out (TIMEOUT) and a reply lost in transport are not answers:
+    they are asked again with the bounded exponential back-off of :class:`~.retry.Backoff`,
+    then raise (the goal aborts with MOTION_PLANNER_UNAVAILABLE); they never become -1.
+    Request errors (1xx: unknown object, invalid request, no or invalid scene) are not answers
+    either: NO_SCENE is retried for ``scene_wait_s``, the others raise.
 
     Attributes:
         planner_runs: answers not served from the motion planner's cache (``from_cache``).
+        retries: questions asked again (busy, time-out or lost reply), over the oracle's life.
     """
+
+    RETRIED = frozenset({RelocateObject.Response.TIMEOUT, RelocateObject.Response.PLANNER_BUSY})
 
     def __init__(
         self,
@@ -54,6 +62,7 @@ class RosPlannerOracle:
         timeout_s: float,
         scene_wait_s: float,
         stop: threading.Event | None = None,
+        backoff: Backoff | None = None,
     ) -> None:
         """Keep the client and the waits.
 
@@ -62,12 +71,15 @@ class RosPlannerOracle:
             timeout_s: longest wait for one answer [s].
             scene_wait_s: how long NO_SCENE answers are retried [s].
             stop: set when the node is shutting down; ends a wait at once.
+            backoff: retry bounds of busy / timed-out / lost answers (default :class:`Backoff`).
         """
         self.client = client
         self.timeout_s = timeout_s
         self.scene_wait_s = scene_wait_s
         self.stop = stop or threading.Event()
+        self.backoff = backoff or Backoff()
         self.planner_runs = 0
+        self.retries = 0
 
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """Ask the motion planner whether ``object_id`` can be relocated after ``relocated``.
@@ -80,59 +92,41 @@ class RosPlannerOracle:
             True if the relocation is feasible (eq. 8: +1), False if not (-1).
 
         Raises:
-            OracleUnavailableError: no answer in time, or the request was rejected.
+            OracleUnavailableError: no answer after the retries, or the request was rejected.
         """
         request = RelocateObject.Request(
             object_id=object_id, relocated_ids=list(relocated), execute=False
         )
         deadline = time.monotonic() + self.scene_wait_s
+        busy = missing = 0
         while True:
             future = self.client.call_async(request)
-            if not wait_for_future(future, self.timeout_s, self.stop) or future.result() is None:
+            answered = wait_for_future(future, self.timeout_s, self.stop)
+            if self.stop.is_set():
                 future.cancel()
-                detail = (
-                    'node shutting down'
-                    if self.stop.is_set()
-                    else f'no answer in {self.timeout_s} s'
-                )
-                raise OracleUnavailableError(object_id, relocated, detail)
-            response = future.result()
-            if response.reason != RelocateObject.Response.NO_SCENE:
+                raise OracleUnavailableError(object_id, relocated, 'node shutting down')
+            response = future.result() if answered else None
+            if response is None:
+                future.cancel()
+                why, missing = f'no answer in {self.timeout_s} s', missing + 1
+                give_up = missing > self.backoff.missing_retries
+            elif response.reason == RelocateObject.Response.NO_SCENE:
+                if time.monotonic() > deadline:
+                    raise OracleUnavailableError(object_id, relocated, response.message)
+                time.sleep(0.2)  # the planner has not received /scene yet
+                continue
+            elif response.reason in self.RETRIED:
+                why, busy = f'reason {response.reason}: {response.message}', busy + 1
+                give_up = busy > self.backoff.retries
+            else:
                 break
-            if time.monotonic() > deadline:
-                raise OracleUnavailableError(object_id, relocated, response.message)
-            time.sleep(0.2)  # the planner has not received /scene yet
+            if give_up:
+                detail = f'{why} (gave up after {busy + missing - 1} retries)'
+                raise OracleUnavailableError(object_id, relocated, detail)
+            self.retries += 1
+            self.stop.wait(self.backoff.delay(busy + missing - 1))
         if 100 <= response.reason < 200:
             detail = f'request rejected (reason {response.reason}): {response.message}'
             raise OracleUnavailableError(object_id, relocated, detail)
         self.planner_runs += not response.from_cache
         return bool(response.feasible)
-
-
-def execute_sequence(
-    client: rclpy.client.Client,
-    sequence: tuple[str, ...],
-    timeout_s: float,
-    stop: threading.Event,
-) -> str:
-    """Relocate each object of ``sequence`` on the arm: one RelocateObject call (execute=true).
-
-    Args:
-        client: a ``/relocate_object`` client.
-        sequence: object ids in relocation order.
-        timeout_s: longest wait for one call [s].
-        stop: set when the node is shutting down; ends a wait at once.
-
-    Returns:
-        An error message, or '' when every relocation was executed.
-    """
-    for i, object_id in enumerate(sequence):
-        request = RelocateObject.Request(
-            object_id=object_id, relocated_ids=list(sequence[:i]), execute=True
-        )
-        future = client.call_async(request)
-        if not wait_for_future(future, timeout_s, stop) or future.result() is None:
-            return f'executing {object_id!r}: no answer in {timeout_s} s'
-        if not future.result().feasible:
-            return f'executing {object_id!r} failed: {future.result().message}'
-    return ''

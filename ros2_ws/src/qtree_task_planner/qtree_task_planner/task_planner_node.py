@@ -10,7 +10,8 @@ goal running -> INVALID_GOAL ("busy"); no /scene in time, no /relocate_object se
 timing out or a request rejected by the planner (reason 1xx, e.g. unknown object) ->
 MOTION_PLANNER_UNAVAILABLE, with the statistics learned so far in the result; scene
 without a target in the clutter or no sequence learned -> NO_SOLUTION; cancel -> CANCELED (checked
-once per episode); an execution step failing -> EXECUTION_FAILED.
+once per episode; during the execution the arm stops at once, result ``executed_ids``); an
+execution step failing -> EXECUTION_FAILED.
 """
 
 from __future__ import annotations
@@ -44,7 +45,8 @@ from qtree_task_planner.messages import (
     stats_msg,
     tree_msg,
 )
-from qtree_task_planner.ros_oracle import RosPlannerOracle, execute_sequence
+from qtree_task_planner.ros_oracle import RosPlannerOracle
+from qtree_task_planner.sequence_execution import CANCELED, FAILED, SequenceExecution
 from qtree_task_planner.training import STOP_CANCELLED, QTreeTrainer
 
 LATCHED_QOS = QoSProfile(  # /scene and /qtree: late joiners get the last message
@@ -89,10 +91,12 @@ class TaskPlannerNode(Node):
             RetrieveTarget,
             '/retrieve_target',
             execute_callback=self._execute,
-            cancel_callback=lambda _: CancelResponse.ACCEPT,
+            cancel_callback=self._on_cancel,
             callback_group=self._group,
             **action_server_qos(),
         )
+        self._execution = SequenceExecution(self, self._planner)  # stops the arm on cancel
+        self._active, self._oracle = None, None  # the running goal's handle and oracle
         self.get_logger().info('task planner ready: action /retrieve_target')
 
     def _check_parameters(self, params: list) -> SetParametersResult:
@@ -110,10 +114,17 @@ class TaskPlannerNode(Node):
     def _param(self, name: str) -> float:
         return float(self.get_parameter(name).value)
 
+    def _on_cancel(self, goal_handle) -> CancelResponse:
+        if goal_handle is self._active:  # training: per episode; execution: the arm stops now
+            self._execution.cancel()
+        return CancelResponse.ACCEPT
+
     def _execute(self, goal_handle) -> Result:
         if not self._busy.acquire(blocking=False):
             goal_handle.abort()
             return result_msg(None, error_code=Result.INVALID_GOAL, message='busy with a goal')
+        self._active, self._oracle = goal_handle, None
+        self._execution.reset()
         try:
             code, message, result, executed = self._run(goal_handle)
         except Exception as err:  # a bug must end the goal with a reason, never hang the client
@@ -128,6 +139,8 @@ class TaskPlannerNode(Node):
             self._busy.release()
         self.get_logger().info(f'goal finished: {message}')
         msg = result_msg(result, error_code=code, message=message, executed=executed)
+        msg.executed_ids = list(self._execution.executed)
+        msg.planner_retries = self._oracle.retries if self._oracle else 0
         try:
             if code == Result.SUCCESS:
                 goal_handle.succeed()
@@ -157,7 +170,7 @@ class TaskPlannerNode(Node):
         if not self._planner.wait_for_service(timeout_sec=self._param('planner_wait_s')):
             msg = 'service /relocate_object not available'
             return Result.MOTION_PLANNER_UNAVAILABLE, msg, None, False
-        oracle = RosPlannerOracle(
+        oracle = self._oracle = RosPlannerOracle(
             self._planner,
             self._param('planner_timeout_s'),
             self._param('scene_wait_s'),
@@ -194,8 +207,10 @@ class TaskPlannerNode(Node):
         if not settings.execute:
             return Result.SUCCESS, summary, result, False
         timeout_s = self._param('execute_timeout_s')
-        error = execute_sequence(self._planner, result.sequence, timeout_s, self.stopping)
-        if error:
+        status, error = self._execution.run(result.sequence, timeout_s, self.stopping)
+        if status == CANCELED:
+            return Result.CANCELED, error, result, False
+        if status == FAILED:
             return Result.EXECUTION_FAILED, error, result, False
         return Result.SUCCESS, summary + ', executed', result, True
 

@@ -1,10 +1,11 @@
 """RetrieveTarget goal validation: every bad field is named in the error."""
 
+import math
 from types import SimpleNamespace
 
 import pytest
 from qtree_task_planner.exceptions import InvalidParameterError, UnknownPolicyError
-from qtree_task_planner.goal import settings_from_goal
+from qtree_task_planner.goal import FLOAT_FIELDS, settings_from_goal
 
 DEFAULTS = dict(
     policy='H-EG',
@@ -70,3 +71,24 @@ def test_epsilon_min_above_epsilon0() -> None:
 def test_unknown_policy() -> None:
     with pytest.raises(UnknownPolicyError, match=r"invalid policy='SARSA'.*H-EG-SET"):
         settings_from_goal(_goal(policy='SARSA'))
+
+
+@pytest.mark.parametrize('value', [math.inf, -math.inf, math.nan], ids=['inf', '-inf', 'nan'])
+@pytest.mark.parametrize('field', FLOAT_FIELDS)
+def test_every_non_finite_float_field_is_named(field: str, value: float) -> None:
+    with pytest.raises(InvalidParameterError, match=f'invalid {field}=.*finite') as err:
+        settings_from_goal(_goal(**{field: value}))  # beta=inf was accepted (#18)
+    assert err.value.field == field
+
+
+def test_the_float_fields_are_every_float64_of_the_goal() -> None:
+    from qtree_msgs.action import RetrieveTarget
+
+    types = RetrieveTarget.Goal.get_fields_and_field_types()
+    assert set(FLOAT_FIELDS) == {name for name, kind in types.items() if kind == 'double'}
+
+
+def test_a_huge_policy_is_quoted_short() -> None:
+    with pytest.raises(UnknownPolicyError, match=r'\(10000 characters\)') as err:
+        settings_from_goal(_goal(policy='P' * 10_000))  # was echoed in full (#18)
+    assert len(str(err.value)) < 300

@@ -1,8 +1,11 @@
 """The node's RelocateObject oracle against a scripted client (no ROS graph needed)."""
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from qtree_msgs.srv import RelocateObject
 from qtree_task_planner.exceptions import OracleUnavailableError
+from qtree_task_planner.retry import Backoff
 from qtree_task_planner.ros_oracle import RosPlannerOracle
 from rclpy.task import Future
 
@@ -50,9 +53,64 @@ def test_request_errors_and_timeouts_raise() -> None:
     rejected = ScriptedClient(Response(reason=Response.UNKNOWN_OBJECT, message="no 'X'"))
     with pytest.raises(OracleUnavailableError, match=r"reason 101.*no 'X'"):
         RosPlannerOracle(rejected, 1.0, 1.0).feasible((), 'X')
-    silent = ScriptedClient(None)
+    silent = ScriptedClient(None, None)  # a lost reply is asked again once
     with pytest.raises(OracleUnavailableError, match=r'no answer in 0\.1 s'):
         RosPlannerOracle(silent, 0.1, 1.0).feasible((), 'O1')
     no_scene = ScriptedClient(*[Response(reason=Response.NO_SCENE, message='none')] * 5)
     with pytest.raises(OracleUnavailableError, match='none'):
         RosPlannerOracle(no_scene, 1.0, scene_wait_s=0.3).feasible((), 'O1')
+
+
+FAST = Backoff(retries=3, missing_retries=1, first_s=0.001, cap_s=0.002)
+BUSY = Response(reason=Response.PLANNER_BUSY, message='planner busy: 8 requests are waiting')
+TIMED_OUT = Response(reason=Response.TIMEOUT, message='planning took 2.1 s')
+
+
+def test_busy_and_timeout_are_asked_again_never_learned_as_infeasible() -> None:
+    client = ScriptedClient(BUSY, TIMED_OUT, BUSY, Response(feasible=True, reason=0))
+    oracle = RosPlannerOracle(client, 1.0, 1.0, backoff=FAST)
+    assert oracle.feasible((), 'O1') is True  # was False: 303/301 were learned as -1
+    assert oracle.retries == 3 and len(client.requests) == 4
+    lost_then_blocked = ScriptedClient(None, Response(reason=Response.SCENE_COLLISION))
+    oracle = RosPlannerOracle(lost_then_blocked, 0.05, 1.0, backoff=FAST)
+    assert oracle.feasible((), 'T') is False
+    assert oracle.retries == 1
+
+
+def test_busy_beyond_the_bound_gives_up_with_the_retries_counted() -> None:
+    client = ScriptedClient(*[BUSY] * 4)
+    oracle = RosPlannerOracle(client, 1.0, 1.0, backoff=FAST)
+    with pytest.raises(OracleUnavailableError, match=r'reason 303.*gave up after 3 retries'):
+        oracle.feasible(('O2',), 'O1')
+    assert oracle.retries == 3 and len(client.requests) == 4
+
+
+def test_backoff_doubles_up_to_its_cap() -> None:
+    backoff = Backoff(retries=6, first_s=0.1, cap_s=1.0)
+    assert [backoff.delay(k) for k in range(6)] == [0.1, 0.2, 0.4, 0.8, 1.0, 1.0]
+    assert backoff.total_s() == pytest.approx(3.5)
+    with pytest.raises(ValueError):
+        Backoff(first_s=2.0, cap_s=1.0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    feasible=st.booleans(),
+    before=st.lists(st.sampled_from(['busy', 'timeout', 'lost']), max_size=6),
+)
+def test_a_loaded_planner_never_gives_a_wrong_answer(feasible: bool, before: list[str]) -> None:
+    """Any mix of busy / timed-out / lost answers before the true one: the true answer, or an
+    error (the goal aborts) - never the opposite of what an idle planner answers."""
+    scripted = {'busy': BUSY, 'timeout': TIMED_OUT, 'lost': None}
+    truth = Response(
+        feasible=feasible, reason=Response.SUCCESS if feasible else Response.NO_CARTESIAN_PATH
+    )
+    client = ScriptedClient(*[scripted[b] for b in before], truth)
+    oracle = RosPlannerOracle(client, 0.01, 1.0, backoff=FAST)
+    try:
+        answer = oracle.feasible((), 'O1')
+    except OracleUnavailableError:
+        too_many_busy = sum(b != 'lost' for b in before) > FAST.retries
+        assert too_many_busy or before.count('lost') > FAST.missing_retries
+        return
+    assert answer is feasible

@@ -14,6 +14,7 @@ from geometry_msgs.msg import Pose, PoseArray
 from jaco2_description.model import ARM_JOINTS
 from qtree_msgs.msg import PlanningEvent
 from qtree_msgs.srv import RelocateObject
+from qtree_node_support.text import clip
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
@@ -47,11 +48,6 @@ def pose_array_msg(path: np.ndarray, frame_id: str) -> PoseArray:
         o.x, o.y, o.z, o.w = (float(v) for v in row[3:])
         msg.poses.append(pose)
     return msg
-
-
-def clip(text: str, limit: int) -> str:
-    """``text`` cut to ``limit`` characters (ending in '…' when cut)."""
-    return text if len(text) <= limit else text[: limit - 1] + '…'
 
 
 def range_descriptor(

@@ -14,9 +14,9 @@ Limits and timing of a request:
   characters; the event carries at most 256 ids of at most 256 characters.
 - Bad requests, ``NO_SCENE`` and cache hits are answered at once, without waiting for the
   planner. Checks that need planning run one at a time (one STPIK state per planner); a request
-  waits at most ``request_timeout_s`` for its turn, then ``TIMEOUT``. ``time_limit_s`` bounds
+  waits at most ``request_timeout_s`` for its turn, then ``PLANNER_BUSY``. ``time_limit_s`` bounds
   the planning itself, so an answer takes at most about ``request_timeout_s + time_limit_s``.
-  At most ``MAX_WAITING_PLANS`` requests wait or plan at once; more get ``TIMEOUT`` (busy) at
+  At most ``MAX_WAITING_PLANS`` requests wait or plan at once; more get ``PLANNER_BUSY`` at
   once, so the executor (``EXECUTOR_THREADS`` threads) always has threads for /joint_states,
   /scene and the other requests.
 - One execution at a time (another gets ``EXECUTION_FAILED``); /scene messages received
@@ -76,7 +76,7 @@ EXTRA = {
         10.0,
         0.0,
         600.0,
-        'longest wait of a request for the busy planner before TIMEOUT; the planning itself '
+        'longest wait of a request for the busy planner before PLANNER_BUSY; the planning itself '
         'is bounded by time_limit_s [s]',
     ),
 }
@@ -198,7 +198,7 @@ class MotionPlannerNode(Node):
         if not self._waiting.acquire(blocking=False):
             return PlanResult(
                 False,
-                Reason.TIMEOUT,
+                Reason.PLANNER_BUSY,
                 f'planner busy: {MAX_WAITING_PLANS} requests are already waiting for it',
             )
         try:
@@ -206,7 +206,7 @@ class MotionPlannerNode(Node):
             if not self._plan_lock.acquire(timeout=remaining_s):
                 return PlanResult(
                     False,
-                    Reason.TIMEOUT,
+                    Reason.PLANNER_BUSY,
                     f'planner busy: not free within request_timeout_s={wait_s:.1f} s',
                 )
             try:

@@ -32,6 +32,7 @@ class Reason(IntEnum):
     CARRIED_COLLISION = 209
     TIMEOUT = 301
     EXECUTION_FAILED = 302
+    PLANNER_BUSY = 303  # not planned: the queue was full; ask again later (#18)
 
 
 def _empty(*shape: int) -> np.ndarray:

@@ -6,6 +6,7 @@ import math
 from collections import Counter
 from collections.abc import Sequence
 
+from qtree_node_support.text import quote
 from qtree_scene.scene import Scenario
 
 from stpik_motion_planner.exceptions import InvalidRequest
@@ -19,9 +20,7 @@ SHOWN_ID_CHARS = 40  # characters of one id quoted in a message or log line
 
 def format_id(name: object) -> str:
     """``repr(name)``, cut to :data:`SHOWN_ID_CHARS` characters with its length when longer."""
-    if isinstance(name, str) and len(name) > SHOWN_ID_CHARS:
-        return f"'{name[:SHOWN_ID_CHARS]}…' ({len(name)} characters)"
-    return repr(name)
+    return quote(name, SHOWN_ID_CHARS)
 
 
 def format_ids(names: Sequence[object]) -> str:
