@@ -75,7 +75,7 @@ class PlannerConfig:
     pregrasp_standoff_m: float = 0.1
     grasp_depth_m: float = 0.0
     lift_clearance_m: float = 0.04
-    retreat_m: float = 0.12  # the hand ends ≥ 25 mm (activation) from the placed object
+    retreat_m: float = 0.1  # the hand ends ≥ 25 mm (activation) from the placed object
     hand_radius_m: float = 0.07
     hand_width_m: float = 0.11
     velocity_scale: float = 0.5

@@ -369,9 +369,16 @@ class MotionPlanner:
             phase = 'return home'
             placed = dataclasses.replace(obj, position=tuple(place_leg[-1].translation), yaw=0.0)
             after = SceneWorld([*scene.objects.values(), placed])
-            retreat = np.vstack(
-                [retreat, stpik.transit(retreat[-1], self.home_q, after, deadline)]
-            )
+            try:
+                home = stpik.transit(retreat[-1], self.home_q, after, deadline)
+            except (SceneCollision, SelfCollision):
+                # Rise straight up first (Cartesian, STPIK), then the joint line home.
+                end = retreat_leg[-1]
+                up = pin.SE3(end.rotation, end.translation + np.r_[0.0, 0.0, HOVER_M])
+                leg = interpolate(end, up, self.config.step_m, self.config.step_rad)
+                rise = stpik.track(retreat[-1], leg, after, [False] * len(leg), deadline)
+                home = np.vstack([rise, stpik.transit(rise[-1], self.home_q, after, deadline)])
+            retreat = np.vstack([retreat, home])
         except MotionPlannerError as err:
             err.args = (f'{phase} at yaw {path.approach_yaw:.2f} rad: {err}',)
             raise
