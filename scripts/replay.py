@@ -10,6 +10,9 @@ Modes (exactly one):
               viewer (with --rrd too: save, then open the file in a viewer). --screenshot PNG
               also renders the saved view at the end of the run with a headless Rerun viewer
               (needs a graphics stack, e.g. Mesa lavapipe: WGPU_BACKEND=vulkan).
+  --tree-png  draw the learned Q-tree (last /qtree message) like the paper's Figure 3 to a PNG:
+              levels as rows, Q on the edges, extracted sequence highlighted, --top-k nodes
+              per level (default 4) with a note of what was left out.
   --publish   republish the recorded topics on a live ROS 2 graph with their original timing
               (like `ros2 bag play`): CDR bytes unchanged, QoS from the recorded
               offered_qos_profiles (transient local where recorded so). --rate scales the speed,
@@ -23,6 +26,7 @@ its last complete chunk, with a warning. Channels with unknown schemas are skipp
 Examples:
   python scripts/replay.py run.mcap --summary
   python scripts/replay.py run.mcap --rerun --rrd run.rrd && rerun run.rrd
+  python scripts/replay.py --tree-png tree.png run.mcap
   python scripts/replay.py run.mcap --publish --rate 2 --topics /joint_states /scene
 """
 
@@ -30,21 +34,19 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import importlib
 import logging
 import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import Any
 
 import yaml
 from qtree_recorder.mcap_reader import McapRun, ReplayError, open_run
+from qtree_recorder.playback import publish
 
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
 PROG = 'replay.py'
-LINGER_S = 0.5  # time the publishers stay up after the last message [s]
 _LOG = logging.getLogger(PROG)
 
 
@@ -59,6 +61,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     mode.add_argument('--summary', action='store_true', help='print what the log contains')
     mode.add_argument('--rerun', action='store_true', help='convert to a Rerun recording')
     mode.add_argument('--publish', action='store_true', help='republish on a live ROS graph')
+    mode.add_argument('--tree-png', type=Path, metavar='PNG', help='draw the learned Q-tree')
+    parser.add_argument('--top-k', type=int, default=4, help='--tree-png: nodes per level')
     rerun = parser.add_argument_group('--rerun options')
     rerun.add_argument('--rrd', type=Path, help='output .rrd (default: LOG with suffix .rrd)')
     rerun.add_argument('--spawn', action='store_true', help='show the run in a Rerun viewer')
@@ -80,6 +84,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     args = parser.parse_args(argv)
     if args.rate <= 0:
         parser.error('--rate must be positive')
+    if args.top_k < 1:
+        parser.error('--top-k must be >= 1')
     return args
 
 
@@ -212,104 +218,6 @@ def _default_urdf() -> Path | None:
     return urdf_path()
 
 
-def message_class(type_name: str) -> Any:
-    """The Python message class of ``pkg/msg/Type``, or None without typesupport."""
-    package, _, name = type_name.partition('/')
-    namespace, _, name = name.rpartition('/')
-    try:
-        return getattr(importlib.import_module(f'{package}.{namespace or "msg"}'), name)
-    except (ImportError, AttributeError):
-        return None
-
-
-def qos_profile(offered: str) -> Any:
-    """An rclpy QoS profile adapted to the recorded offers (as ``ros2 bag play`` does).
-
-    Reliable if every recorded publisher was reliable, transient local if every one was; depth
-    is the largest recorded depth (10 when nothing was recorded).
-    """
-    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-
-    try:
-        profiles = yaml.safe_load(offered or '[]') or []
-    except yaml.YAMLError:
-        profiles = []
-    profiles = [p for p in profiles if isinstance(p, dict)] if isinstance(profiles, list) else []
-
-    def policy(item: dict[str, Any], key: str, enum: Any) -> Any:
-        value = item.get(key)
-        try:
-            return enum(value) if isinstance(value, int) else enum.get_from_short_key(str(value))
-        except (KeyError, ValueError):
-            return None
-
-    reliable = all(
-        policy(p, 'reliability', ReliabilityPolicy) == ReliabilityPolicy.RELIABLE for p in profiles
-    )
-    latched = bool(profiles) and all(
-        policy(p, 'durability', DurabilityPolicy) == DurabilityPolicy.TRANSIENT_LOCAL
-        for p in profiles
-    )
-    depth = max((int(p.get('depth', 0) or 0) for p in profiles), default=0) or 10
-    return QoSProfile(
-        history=HistoryPolicy.KEEP_LAST,
-        depth=depth if latched else max(depth, 10),
-        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
-    )
-
-
-def publish(run: McapRun, *, rate: float, topics: list[str] | None, wait_s: float) -> int:
-    """Republish ``run`` with its original timing scaled by ``rate``; return messages sent."""
-    import rclpy
-
-    selected = list(run.topics) if not topics else []
-    for name in topics or []:
-        if name in run.topics:
-            selected.append(name)
-        else:
-            _LOG.warning('topic %s is not in the log; skipped', name)
-    rclpy.init()
-    try:
-        node = rclpy.create_node('qtree_replay')
-        publishers = {}
-        for name in selected:
-            info = run.topics[name]
-            cls = message_class(info.type)
-            if cls is None:
-                _LOG.warning('no Python typesupport for %s; %s skipped', info.type, name)
-                continue
-            publishers[name] = node.create_publisher(cls, name, qos_profile(info.qos_profiles))
-        if not publishers:
-            raise ReplayError(f'{run.path}: nothing to publish')
-        deadline = time.monotonic() + wait_s
-        while time.monotonic() < deadline and not any(
-            p.get_subscription_count() for p in publishers.values()
-        ):
-            time.sleep(0.02)
-        sent = _play(run, publishers, rate)
-        time.sleep(LINGER_S)
-        print(f'published {sent} messages on {len(publishers)} topics')
-        node.destroy_node()
-        return sent
-    finally:
-        rclpy.try_shutdown()
-
-
-def _play(run: McapRun, publishers: dict[str, Any], rate: float) -> int:
-    start_wall = time.monotonic()
-    start_log: int | None = None
-    sent = 0
-    for raw in run.raw_messages(publishers):
-        start_log = raw.log_time_ns if start_log is None else start_log
-        delay = start_wall + (raw.log_time_ns - start_log) * 1e-9 / rate - time.monotonic()
-        if delay > 0:
-            time.sleep(delay)
-        publishers[raw.topic].publish(raw.data)
-        sent += 1
-    return sent
-
-
 def main(argv: list[str] | None = None) -> int:
     """Run the selected mode; return the process exit code."""
     args = parse_args(argv)
@@ -327,6 +235,10 @@ def main(argv: list[str] | None = None) -> int:
                         '--screenshot needs a saved recording (drop --spawn or add --rrd)'
                     )
                 screenshot(rrd, args.screenshot)
+        elif args.tree_png is not None:
+            from qtree_recorder.qtree_figure import tree_png_from_run
+
+            print(f'wrote {tree_png_from_run(run, args.tree_png, top_k=args.top_k)}')
         else:
             publish(run, rate=args.rate, topics=args.topics, wait_s=args.wait_subscribers)
     except ReplayError as err:
