@@ -207,7 +207,7 @@ def _default_urdf() -> Path | None:
     try:
         from jaco2_description.model import urdf_path
     except ImportError:
-        _LOG.warning('no /robot_description in the log and jaco2_sim not found: no robot shown')
+        _LOG.warning('no /robot_description in the log and no jaco2_description: no robot shown')
         return None
     return urdf_path()
 

@@ -7,8 +7,9 @@ import math
 import pytest
 from qtree_msgs.action import RetrieveTarget
 from qtree_msgs.msg import ObjectState, PlanningEvent, QTree, QTreeEdge, Scene, TrainingStats
-from qtree_msgs.srv import AttachObject, RelocateObject, ResetScene
+from qtree_msgs.srv import AttachObject, RelocateObject, ResetScene, SetScene
 from rclpy.serialization import deserialize_message, serialize_message
+from shape_msgs.msg import SolidPrimitive
 
 
 def _scene() -> Scene:
@@ -18,9 +19,7 @@ def _scene() -> Scene:
         obj = ObjectState(
             id=f'O{index}',
             role=ObjectState.ROLE_OBSTACLE,
-            shape=ObjectState.SHAPE_CYLINDER,
-            radius=0.03,
-            height=0.15,
+            shape=SolidPrimitive(type=SolidPrimitive.CYLINDER, dimensions=[0.15, 0.03]),
             status=ObjectState.STATUS_IN_CLUTTER,
         )
         obj.pose.position.x = 0.4 + 0.1 * index
@@ -71,6 +70,8 @@ def _scene() -> Scene:
             from_cache=True,
         ),
         ResetScene.Request(scenario='s2'),
+        SetScene.Request(scene=_scene()),
+        SetScene.Response(success=False, message="SetScene: objects[0].pose.position.x: 'O0'"),
         AttachObject.Request(object_id='O1', attach=False),
         RetrieveTarget.Goal(policy='H-LRND', seed=7),
         RetrieveTarget.Result(success=True, sequence=['O1', 'T'], episodes=100, mp_calls=9),

@@ -14,6 +14,7 @@ from qtree_msgs.msg import ObjectState, Scene
 from qtree_msgs.srv import AttachObject, ResetScene
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
+from shape_msgs.msg import SolidPrimitive
 from std_msgs.msg import String
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
@@ -135,7 +136,8 @@ def test_attached_object_follows_the_end_effector(probe: Probe, ros_node: Any) -
     scene = probe.scenes[-1]
     assert scene.scenario_name == 's1' and scene.attached_id == ''
     table = next(o for o in scene.objects if o.id == 'table')
-    assert table.role == ObjectState.ROLE_STATIC and table.shape == ObjectState.SHAPE_BOX
+    assert table.role == ObjectState.ROLE_STATIC and table.shape.type == SolidPrimitive.BOX
+    assert list(table.shape.dimensions) == pytest.approx([1.2, 1.4, 0.05])
     robot_description: list[String] = []
     ros_node.create_subscription(String, '/robot_description', robot_description.append, LATCHED)
     assert ros_node.spin_until(lambda: bool(robot_description))

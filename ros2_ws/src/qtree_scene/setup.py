@@ -19,6 +19,6 @@ setup(
     zip_safe=True,
     maintainer='qtree-tamp developers',
     maintainer_email='dev@qtree-tamp.example',
-    description='Scene types, scenario YAML loader/validator, scenarios S1-S3 and the clutter generator.',
+    description='Scene types, scenario YAML loader/validator, Scene message conversions, scenarios S1-S3 and the clutter generator.',
     license='Apache-2.0',
 )

@@ -10,9 +10,10 @@ import numpy as np
 import pinocchio as pin
 import rclpy.serialization
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import Pose, Vector3
-from jaco2_description.model import ARM_JOINTS, BASE_LINK, FINGER_JOINTS
-from qtree_msgs.msg import ObjectState, Scene
+from jaco2_description.model import ARM_JOINTS, FINGER_JOINTS
+from qtree_msgs.msg import Scene
+from qtree_scene import conversions as scene_conversions
+from qtree_scene.message import STATUS_CODES
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
@@ -20,34 +21,8 @@ from trajectory_msgs.msg import JointTrajectory
 from jaco2_sim.exceptions import TrajectoryError
 from jaco2_sim.world import World
 
-ROLES = {
-    'target': ObjectState.ROLE_TARGET,
-    'obstacle': ObjectState.ROLE_OBSTACLE,
-    'static': ObjectState.ROLE_STATIC,
-}
-SHAPES = {'cylinder': ObjectState.SHAPE_CYLINDER, 'box': ObjectState.SHAPE_BOX}
-STATUSES = {
-    'in_clutter': ObjectState.STATUS_IN_CLUTTER,
-    'grasped': ObjectState.STATUS_GRASPED,
-    'relocated': ObjectState.STATUS_RELOCATED,
-}
-STATUS_NAMES = {code: name for name, code in STATUSES.items()}
+STATUS_NAMES = {code: name for name, code in STATUS_CODES.items()}
 MAX_SCANNED_NAMES = 256  # trajectory_size() stops counting points after this many joint names
-
-
-def pose_msg(placement: pin.SE3) -> Pose:
-    """geometry_msgs/Pose of a transform (quaternion x, y, z, w)."""
-    msg = Pose()
-    t = placement.translation
-    msg.position.x, msg.position.y, msg.position.z = (float(v) for v in t)
-    q = pin.Quaternion(placement.rotation)
-    msg.orientation.x, msg.orientation.y, msg.orientation.z, msg.orientation.w = (
-        float(q.x),
-        float(q.y),
-        float(q.z),
-        float(q.w),
-    )
-    return msg
 
 
 def parameter_descriptor(
@@ -68,29 +43,15 @@ def parameter_descriptor(
     return ParameterDescriptor(description=text, **kw)
 
 
-def _vector3(values: Sequence[float]) -> Vector3:
-    return Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
-
-
 def scene_msg(world: World, stamp: Time) -> Scene:
     """qtree_msgs/Scene of the world: objects (table = STATIC box), drop zone, attached id."""
-    msg = Scene()
-    msg.header.stamp = stamp
-    msg.header.frame_id = BASE_LINK
-    msg.scenario_name = world.scenario.name
+    poses = {}
     for object_id, state in world.objects.items():
-        spec = state.spec
-        obj = ObjectState(id=object_id, role=ROLES[spec.role], shape=SHAPES[spec.shape])
-        obj.radius, obj.height = float(spec.radius), float(spec.height)
-        obj.box_size = _vector3(spec.size)
-        obj.pose = pose_msg(state.pose)
-        obj.status = STATUSES[state.status]
-        msg.objects.append(obj)
-    msg.attached_id = world.attached_id or ''
-    center = np.array(world.scenario.drop_zone_center, dtype=float)
-    msg.drop_zone = pose_msg(pin.SE3(np.eye(3), center))
-    msg.drop_zone_size = _vector3(world.scenario.drop_zone_size)
-    msg.robot_base = pose_msg(pin.SE3.Identity())
+        q = pin.Quaternion(state.pose.rotation)
+        poses[object_id] = (state.pose.translation, (q.x, q.y, q.z, q.w))
+    statuses = {object_id: state.status for object_id, state in world.objects.items()}
+    msg = scene_conversions.scene_msg(world.scenario, poses, statuses, world.attached_id or '')
+    msg.header.stamp = stamp
     return msg
 
 

@@ -25,11 +25,13 @@ from typing import Any
 import numpy as np
 from jaco2_description.model import FINGER_JOINTS, Jaco2Model, urdf_text
 from qtree_msgs.msg import Scene
-from qtree_msgs.srv import AttachObject, ResetScene
+from qtree_msgs.srv import AttachObject, ResetScene, SetScene
 from qtree_node_support.lifecycle import run_node
 from qtree_node_support.qos import SERVICE_QOS
 from qtree_node_support.text import clip, quote
+from qtree_scene.message import parse_scene_msg
 from qtree_scene.scenario import load_scenario
+from qtree_scene.scene import Scenario
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import InvalidParameterValueException, ParameterUninitializedException
 from rclpy.node import Node
@@ -113,6 +115,7 @@ class Jaco2SimNode(Node):
             JointTrajectory, '/joint_trajectory', self._on_raw_trajectory, TRAJECTORY_QOS, raw=True
         )
         self.create_service(ResetScene, '~/reset_scene', self._on_reset, qos_profile=SERVICE_QOS)
+        self.create_service(SetScene, '~/set_scene', self._on_set_scene, qos_profile=SERVICE_QOS)
         self.create_service(
             AttachObject, '~/attach_object', self._on_attach, qos_profile=SERVICE_QOS
         )
@@ -163,7 +166,10 @@ class Jaco2SimNode(Node):
 
     def _load(self, name: str) -> None:
         """Load scenario ``name`` and teleport home; on any exception nothing has changed."""
-        scenario = load_scenario(name)
+        self._install(load_scenario(name))
+
+    def _install(self, scenario: Scenario) -> None:
+        """Make ``scenario`` the scene and teleport home; on any exception nothing has changed."""
         world = World(scenario)
         self.sim.reset(np.asarray(scenario.home))
         self.scenario, self.world = scenario, world
@@ -219,7 +225,10 @@ class Jaco2SimNode(Node):
     def _on_reset(self, request: ResetScene.Request, response: ResetScene.Response):
         name = request.scenario or self.scenario.source or self.scenario.name
         try:
-            self._load(name)
+            if request.scenario or self.scenario.source:
+                self._load(name)
+            else:  # a scene given by SetScene: back to its initial state
+                self._install(self.scenario)
         except (Jaco2SimError, ModelError, ScenarioError) as err:
             response.success, response.message = False, str(err)
             self.get_logger().warning(f'reset_scene failed: {err}')
@@ -230,6 +239,24 @@ class Jaco2SimNode(Node):
             self.get_logger().error(f'reset_scene failed: {response.message}')
             return response
         response.success, response.message = True, f'scenario {quote(self.scenario.name)} loaded'
+        return response
+
+    def _on_set_scene(self, request: SetScene.Request, response: SetScene.Response):
+        try:
+            self._install(parse_scene_msg(request.scene))
+        except (Jaco2SimError, ModelError, ScenarioError) as err:
+            response.success, response.message = False, str(err)
+            self.get_logger().warning(f'set_scene rejected: {err}')
+            return response
+        except Exception as err:  # a bad message must not kill the node
+            response.success = False
+            response.message = f'SetScene: unexpected {type(err).__name__}: {err}'
+            self.get_logger().error(f'set_scene failed: {response.message}')
+            return response
+        response.success = True
+        response.message = (
+            f'scene {self.scenario.name!r} set ({len(self.scenario.objects)} objects)'
+        )
         return response
 
     def _on_attach(self, request: AttachObject.Request, response: AttachObject.Response):

@@ -37,10 +37,12 @@ def test_trajectory_size_reads_the_lengths(frame_id: str, names: list[str], n: i
 
 
 def test_trajectory_size_is_cheap_and_robust() -> None:
+    # Bounds are on this process's CPU time, not wall time: other processes on a loaded machine
+    # (CI, parallel agents) must not make a cost bound fail.
     raw = serialize_message(_trajectory(100_000))
-    start = time.perf_counter()
+    start = time.process_time()
     assert trajectory_size(raw) == (7, 100_000)
-    assert time.perf_counter() - start < 0.01
+    assert time.process_time() - start < 0.01
     many = [f'j{k}' for k in range(MAX_SCANNED_NAMES + 1)]
     assert trajectory_size(serialize_message(_trajectory(2, many))) == (len(many), None)
     assert trajectory_size(raw[:20]) is None  # truncated
@@ -50,9 +52,9 @@ def test_trajectory_size_is_cheap_and_robust() -> None:
 
 def test_trajectory_arrays_vectorised() -> None:
     msg = deserialize_message(serialize_message(_trajectory(10_000)), JointTrajectory)
-    start = time.perf_counter()
+    start = time.process_time()
     names, times, positions, velocities = trajectory_arrays(msg)
-    seconds = time.perf_counter() - start
+    seconds = time.process_time() - start
     assert seconds < 0.05, f'{seconds:.3f} s for 10 000 points'
     assert names == list(ARM_JOINTS) and velocities is None
     np.testing.assert_allclose(times, 0.01 * np.arange(1, 10_001), atol=1e-9)

@@ -19,7 +19,8 @@ from typing import Any
 from qtree_recorder.tf_frames import WORLD_FRAME, FrameTransform
 
 ROLE_TARGET, ROLE_OBSTACLE, ROLE_STATIC = 0, 1, 2  # qtree_msgs/ObjectState.ROLE_*
-SHAPE_CYLINDER, SHAPE_BOX = 0, 1  # qtree_msgs/ObjectState.SHAPE_*
+PRIMITIVE_BOX, PRIMITIVE_CYLINDER = 1, 3  # shape_msgs/SolidPrimitive.BOX, .CYLINDER
+LEGACY_CYLINDER = 0  # ObjectState.SHAPE_CYLINDER of logs recorded before SolidPrimitive shapes
 STATUS_IN_CLUTTER, STATUS_GRASPED, STATUS_RELOCATED = 0, 1, 2  # ObjectState.STATUS_*
 MARKER_CUBE, MARKER_CYLINDER, MARKER_TEXT = 1, 3, 9  # visualization_msgs/Marker types
 ACTION_ADD, ACTION_DELETEALL = 0, 3  # visualization_msgs/Marker actions
@@ -75,12 +76,32 @@ def _marker(stamp: dict, ns: str, marker_id: int, kind: int, pose: dict, scale: 
     }
 
 
+def object_geometry(obj: Any) -> tuple[str, float, float, tuple[float, float, float]]:
+    """``(shape, radius, height, box size)`` of a decoded ObjectState [m].
+
+    ``obj.shape`` is a ``shape_msgs/SolidPrimitive`` (CYLINDER dimensions [height, radius], BOX
+    [x, y, z]); older logs, with ``shape`` a code and ``radius``/``height``/``box_size`` fields,
+    are read too. An unknown primitive is drawn as a box of its (padded) dimensions.
+    """
+    shape = obj.shape
+    if not hasattr(shape, 'type'):  # a log recorded before SolidPrimitive shapes
+        size = obj.box_size
+        if int(shape) == LEGACY_CYLINDER:
+            return 'cylinder', float(obj.radius), float(obj.height), (0.0, 0.0, 0.0)
+        return 'box', 0.0, 0.0, (float(size.x), float(size.y), float(size.z))
+    dims = [float(v) for v in shape.dimensions]
+    if int(shape.type) == PRIMITIVE_CYLINDER and len(dims) == 2:
+        return 'cylinder', dims[1], dims[0], (0.0, 0.0, 0.0)
+    dims = [*dims, 0.0, 0.0, 0.0][:3]
+    return 'box', 0.0, 0.0, (dims[0], dims[1], dims[2])
+
+
 def object_scale(obj: Any) -> dict[str, float]:
     """Marker scale of an object: cylinder (2r, 2r, h), box its full edge lengths [m]."""
-    if int(obj.shape) == SHAPE_CYLINDER:
-        diameter = 2.0 * float(obj.radius)
-        return {'x': diameter, 'y': diameter, 'z': float(obj.height)}
-    return _xyz(obj.box_size)
+    shape, radius, height, size = object_geometry(obj)
+    if shape == 'cylinder':
+        return {'x': 2.0 * radius, 'y': 2.0 * radius, 'z': height}
+    return dict(zip('xyz', size, strict=True))
 
 
 def scene_markers(scene: Any, stamp_ns: int) -> dict:
@@ -101,7 +122,7 @@ def scene_markers(scene: Any, stamp_ns: int) -> dict:
     for index, obj in enumerate(scene.objects):
         pose = _pose(obj.pose)
         scale = object_scale(obj)
-        kind = MARKER_CYLINDER if int(obj.shape) == SHAPE_CYLINDER else MARKER_CUBE
+        kind = MARKER_CYLINDER if object_geometry(obj)[0] == 'cylinder' else MARKER_CUBE
         color = object_color(int(obj.role), int(obj.status), bool(attached) and obj.id == attached)
         markers.append(_marker(stamp, 'objects', index, kind, pose, scale, color))
         if int(obj.role) != ROLE_STATIC:

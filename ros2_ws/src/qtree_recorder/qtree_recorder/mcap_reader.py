@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import zstandard
 from mcap.exceptions import McapError
 from mcap.records import Channel, Chunk, Footer, Header, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
@@ -147,7 +148,13 @@ def _iter_records(path: Path) -> Iterator[tuple[int, Any]]:
                 try:
                     for inner in breakup_chunk(record, validate_crc=True):
                         yield start, inner
-                except (McapError, ValueError, zlib.error, RuntimeError) as err:
+                except (
+                    McapError,
+                    ValueError,
+                    zlib.error,
+                    zstandard.ZstdError,
+                    RuntimeError,
+                ) as err:
                     message = f'{path}: damaged chunk at byte {start} ({err})'
                     raise CorruptLogError(message) from None
             elif record is not None:

@@ -29,6 +29,7 @@ import numpy as np
 import rerun as rr
 
 from qtree_recorder import rerun_blueprint as bp
+from qtree_recorder.markers import object_geometry
 
 _LOG = logging.getLogger(__name__)
 
@@ -42,7 +43,6 @@ NODE_COLOR = (120, 120, 130)
 ROOT_LABEL = 'root'
 # qtree_msgs constants (ObjectState.msg, RelocateObject.srv) as names.
 ROLES = {0: 'target', 1: 'obstacle', 2: 'static'}
-SHAPES = {0: 'cylinder', 1: 'box'}
 STATUSES = {0: 'in_clutter', 1: 'grasped', 2: 'relocated'}
 REASONS = {
     0: 'SUCCESS', 101: 'UNKNOWN_OBJECT', 102: 'ALREADY_RELOCATED', 103: 'INVALID_REQUEST',
@@ -401,15 +401,16 @@ def scene_objects(msg: Any) -> list[dict[str, Any]]:
     """Convert a ``qtree_msgs/msg/Scene`` (decoded, attribute access) to scene-object dicts."""
     objects = []
     for obj in msg.objects:
-        p, q, s = obj.pose.position, obj.pose.orientation, obj.box_size
+        p, q = obj.pose.position, obj.pose.orientation
+        shape, radius, height, size = object_geometry(obj)
         objects.append({
             'id': str(obj.id),
             'role': ROLES.get(int(obj.role), 'obstacle'),
-            'shape': SHAPES.get(int(obj.shape), 'cylinder'),
+            'shape': shape,
             'status': STATUSES.get(int(obj.status), 'in_clutter'),
-            'radius': float(obj.radius),
-            'height': float(obj.height),
-            'size': (float(s.x), float(s.y), float(s.z)),
+            'radius': radius,
+            'height': height,
+            'size': size,
             'position': (float(p.x), float(p.y), float(p.z)),
             'orientation': (float(q.x), float(q.y), float(q.z), float(q.w)),
         })  # fmt: skip

@@ -50,10 +50,11 @@ def _object(oid: str, role: int, pos: tuple[float, float, float], status: int) -
     return {
         'id': oid,
         'role': role,
-        'shape': 1 if box else 0,
-        'radius': 0.0 if box else 0.03,
-        'height': 0.0 if box else 0.15,
-        'box_size': {'x': 0.7, 'y': 1.0, 'z': 0.04} if box else {'x': 0.0, 'y': 0.0, 'z': 0.0},
+        'shape': {
+            'type': 1 if box else 3,  # SolidPrimitive.BOX, .CYLINDER
+            'dimensions': [0.7, 1.0, 0.04] if box else [0.15, 0.03],
+            'polygon': {'points': []},
+        },
         'pose': _pose(*pos),
         'status': status,
     }

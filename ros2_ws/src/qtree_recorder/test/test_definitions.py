@@ -47,6 +47,9 @@ def test_scene_has_every_dependency_once_in_rosbag2_order(library: DefinitionLib
         'geometry_msgs/Quaternion',
         'geometry_msgs/Vector3',
         'qtree_msgs/ObjectState',
+        'shape_msgs/SolidPrimitive',
+        'geometry_msgs/Polygon',
+        'geometry_msgs/Point32',
         'std_msgs/Header',
         'builtin_interfaces/Time',
     ]
@@ -60,7 +63,7 @@ def test_rosbags_parses_every_block(library: DefinitionLibrary) -> None:
     types = get_types_from_msg(library.definition('qtree_msgs/msg/Scene').text,
                                'qtree_msgs/msg/Scene')  # fmt: skip
     assert {'qtree_msgs/msg/Scene', 'qtree_msgs/msg/ObjectState', 'builtin_interfaces/msg/Time',
-            'geometry_msgs/msg/Pose'} <= set(types)  # fmt: skip
+            'geometry_msgs/msg/Pose', 'shape_msgs/msg/SolidPrimitive'} <= set(types)  # fmt: skip
 
 
 def test_bundled_tf_message_and_action_feedback(library: DefinitionLibrary) -> None:

@@ -15,6 +15,8 @@ from qtree_recorder.markers import (
     COLOR_STATIC,
     COLOR_TARGET,
     object_color,
+    object_geometry,
+    object_scale,
     object_transforms,
     scene_markers,
 )
@@ -31,8 +33,13 @@ def pose(x: float, y: float, z: float, qw: float = 1.0) -> Msg:
 
 
 def obj(id_: str, role: int, shape: int, status: int = 0, **kw) -> Msg:
-    return Msg(id=id_, role=role, shape=shape, status=status, radius=kw.get('radius', 0.0),
-               height=kw.get('height', 0.0), box_size=kw.get('box', vec(0, 0, 0)),
+    """An ObjectState; ``shape`` 0 cylinder (radius, height), 1 box (box), as SolidPrimitive."""
+    if shape == 0:
+        primitive = Msg(type=3, dimensions=[kw.get('height', 0.0), kw.get('radius', 0.0)])
+    else:
+        box = kw.get('box', vec(0, 0, 0))
+        primitive = Msg(type=1, dimensions=[box.x, box.y, box.z])
+    return Msg(id=id_, role=role, shape=primitive, status=status,
                pose=kw.get('pose', pose(0.5, 0.0, 0.06)))  # fmt: skip
 
 
@@ -95,3 +102,16 @@ def test_object_frames(scene: Msg) -> None:
 def test_bad_scene_is_reported() -> None:
     with pytest.raises(AttributeError):
         scene_markers(Msg(objects=[Msg(id='x')]), 0)
+
+
+def test_solid_primitive_and_legacy_shapes() -> None:
+    cylinder = obj('T', 0, 0, radius=0.03, height=0.12)
+    assert object_geometry(cylinder) == ('cylinder', 0.03, 0.12, (0.0, 0.0, 0.0))
+    box = obj('B', 1, 1, box=vec(0.1, 0.2, 0.3))
+    assert object_geometry(box) == ('box', 0.0, 0.0, (0.1, 0.2, 0.3))
+    # Logs recorded before SolidPrimitive shapes: shape code + radius/height/box_size fields.
+    legacy = Msg(shape=0, radius=0.04, height=0.2, box_size=vec(0, 0, 0))
+    assert object_geometry(legacy) == ('cylinder', 0.04, 0.2, (0.0, 0.0, 0.0))
+    legacy_box = Msg(shape=1, radius=0.0, height=0.0, box_size=vec(0.7, 1.0, 0.04))
+    assert object_scale(legacy_box) == {'x': 0.7, 'y': 1.0, 'z': 0.04}
+    assert object_scale(cylinder) == {'x': 0.06, 'y': 0.06, 'z': 0.12}

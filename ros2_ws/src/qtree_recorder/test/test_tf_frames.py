@@ -1,4 +1,4 @@
-"""Arm /tf from joint states (qtree_recorder.tf_frames) against jaco2_sim's model and FK facts."""
+"""Arm /tf from joint states (qtree_recorder.tf_frames) against jaco2_description's model."""
 
 from __future__ import annotations
 
@@ -42,7 +42,7 @@ def test_frames_cover_every_link(frames: ArmFrames) -> None:
     assert set(ARM) <= set(frames.joint_names)
 
 
-def test_matches_jaco2_sim_link_placements(frames: ArmFrames) -> None:
+def test_matches_jaco2_description_link_placements(frames: ArmFrames) -> None:
     rng = np.random.default_rng(3)
     names = list(frames.joint_names)
     for _ in range(5):

@@ -1,4 +1,4 @@
-"""Scene types, the scenario YAML loader/validator and the clutter generator (no ROS import).
+"""Scene types, the scenario YAML loader/validator, the clutter generator and Scene conversions.
 
 Shared by the simulator and the motion planner without either depending on the other.
 """

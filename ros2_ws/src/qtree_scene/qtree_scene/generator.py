@@ -1,29 +1,219 @@
-"""Seeded random cluttered scenes for scaling studies and property tests (no ROS).
+"""Seeded random cluttered scenes of household-sized objects for scaling studies (no ROS).
 
-Cylinders are placed by random sequential addition in a rectangle in front of the robot
-(x ≥ ``x_min``, centred on y = 0, width = 1.75 × depth like the paper-style region
-x ∈ [0.35, 0.75], |y| ≤ 0.35). The rectangle's area is set by ``density`` = total footprint area /
-region area. The object farthest from the robot base is the target ``'T'``; the obstacles are
-``'O1'``… in order of increasing distance from the base.
+Objects (cylinders, and boxes with probability ``box_share``) are placed by random sequential
+addition, largest first, in a rectangle in front of the robot: x ≥ ``x_min``, centred on y = 0,
+width = ``ASPECT`` × depth. The rectangle's area is set by ``density`` = total footprint area /
+region area (:func:`region_size`; a scene of at most ``SMALL_SCENE`` objects gets at least
+room for them, hence may have a lower density). The target ``'T'`` is drawn among the objects
+inside the arm's side-grasp workspace (:func:`in_side_grasp_workspace`) that stand among the
+clutter: some object is nearer the base within the target's approach corridor and some object is
+farther from the base (never simply the farthest object). The obstacles are ``'O1'``… in order
+of increasing distance from the base. The same arguments always give the same scene.
+
+Whether the target can actually be retrieved is checked with the motion planner outside this
+package (``qtree_task_planner.clutter.generate_retrievable``).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from jaco2_description.model import HOME
 
 from qtree_scene.exceptions import ScenarioError
+from qtree_scene.footprint import Footprint, overlap
 from qtree_scene.scenario import TABLE_ID, validate_scenario
 from qtree_scene.scene import ObjectSpec, Scenario
 
-MAX_DENSITY = 0.4  # random sequential addition jams near 0.55; stay well below [-]
+MAX_DENSITY = 0.4  # random sequential addition of mixed shapes jams near 0.45; stay below [-]
 ASPECT = 1.75  # region width (y) / depth (x) [-]
 DROP_ZONE_CENTER = (0.0, 0.5, 0.15)  # [m]
 DROP_ZONE_SIZE = (0.3, 0.3, 0.3)  # [m]
 TABLE_X_MIN = -0.25  # table edge behind the robot base [m]
 TABLE_MARGIN = 0.1  # table border around the clutter region [m]
+# Side-grasp workspace of the Jaco² j2s7s300 for the target: horizontal distance of the object
+# axis from the base axis and its azimuth (isolated objects are graspable on x ∈ [0.3, 0.85] m,
+# |y| ≤ 0.45 m; these bounds keep a margin so that a cleared target is always in reach).
+WORKSPACE_REACH_M = (0.34, 0.72)  # [m]
+WORKSPACE_AZIMUTH_RAD = 0.75  # |atan2(y, x)| ≤ this [rad]
+CORRIDOR_HALF_WIDTH_M = 0.06  # half width of the hand's approach corridor toward the base [m]
+RADIUS_LIMITS = (0.01, 0.08)  # accepted radius_range bounds [m]
+HEIGHT_LIMITS = (0.03, 0.4)  # accepted height_range bounds [m]
+SMALL_SCENE = 3  # scenes of at most this many objects get room for them at any density [-]
+LAYOUT_RESTARTS = 8  # fresh layouts tried before the density is declared impossible [-]
+
+
+@dataclass(frozen=True)
+class _Shape:
+    """One drawn object before placement: a cylinder (radius) or a box (edges sx, sy), height."""
+
+    box: bool
+    radius: float
+    sx: float
+    sy: float
+    height: float
+
+    @property
+    def area(self) -> float:
+        """Footprint area [m²]."""
+        return self.sx * self.sy if self.box else math.pi * self.radius**2
+
+    @property
+    def bound(self) -> float:
+        """Radius of the footprint's bounding circle [m]."""
+        return math.hypot(self.sx, self.sy) / 2 if self.box else self.radius
+
+
+def region_size(footprint_area: float, density: float) -> tuple[float, float]:
+    """Depth (x) and width (y) [m] of the clutter rectangle holding ``footprint_area`` [m²]."""
+    area = footprint_area / density  # [m²]
+    depth = math.sqrt(area / ASPECT)
+    return depth, ASPECT * depth
+
+
+def in_side_grasp_workspace(position: tuple[float, ...]) -> bool:
+    """Whether an object centred at ``position`` (x, y[, z]) [m] is inside the target workspace."""
+    reach = math.hypot(position[0], position[1])
+    azimuth = abs(math.atan2(position[1], position[0]))
+    low, high = WORKSPACE_REACH_M
+    return low <= reach <= high and azimuth <= WORKSPACE_AZIMUTH_RAD
+
+
+def footprint_area(obj: ObjectSpec) -> float:
+    """Area of an object's footprint on the table [m²]."""
+    return math.pi * obj.radius**2 if obj.shape == 'cylinder' else obj.size[0] * obj.size[1]
+
+
+def _check_arguments(
+    n_objects: object,
+    density: object,
+    radius_range: tuple[float, float],
+    height_range: tuple[float, float],
+    box_share: float,
+    gap: float,
+) -> None:
+    source = 'generate_clutter'
+    if isinstance(n_objects, bool) or not isinstance(n_objects, int) or n_objects < 0:
+        raise ScenarioError(source, 'n_objects', f'must be an int ≥ 0, got {n_objects!r}')
+    if (
+        isinstance(density, bool)
+        or not isinstance(density, (int, float))
+        or not (math.isfinite(density) and 0 < density <= MAX_DENSITY)
+    ):
+        raise ScenarioError(source, 'density', f'must be in (0, {MAX_DENSITY}], got {density}')
+    for name, (lo, hi), (low, high) in (
+        ('radius_range', radius_range, RADIUS_LIMITS),
+        ('height_range', height_range, HEIGHT_LIMITS),
+    ):
+        if not (math.isfinite(lo) and math.isfinite(hi) and low <= lo <= hi <= high):
+            raise ScenarioError(
+                source, name, f'must satisfy {low} ≤ low ≤ high ≤ {high} m, got {(lo, hi)}'
+            )
+    if not (math.isfinite(box_share) and 0.0 <= box_share <= 1.0):
+        raise ScenarioError(source, 'box_share', f'must be in [0, 1], got {box_share}')
+    if not (math.isfinite(gap) and 0 < gap <= 0.1):
+        raise ScenarioError(source, 'gap', f'must be in (0, 0.1] m, got {gap}')
+
+
+def _draw_shapes(
+    rng: np.random.Generator,
+    n: int,
+    radius_range: tuple[float, float],
+    height_range: tuple[float, float],
+    box_share: float,
+) -> list[_Shape]:
+    """Cylinders of radius in ``radius_range``; boxes with edges in 2 × ``radius_range``."""
+    shapes = []
+    for _ in range(n):
+        box = bool(rng.random() < box_share)
+        radius = float(rng.uniform(*radius_range))
+        sx, sy = (float(v) for v in 2 * rng.uniform(*radius_range, 2))
+        height = float(rng.uniform(*height_range))
+        if box:
+            shapes.append(_Shape(True, 0.0, sx, sy, height))
+        else:
+            shapes.append(_Shape(False, radius, 2 * radius, 2 * radius, height))
+    return shapes
+
+
+def _layout(
+    rng: np.random.Generator,
+    shapes: list[_Shape],
+    depth: float,
+    width: float,
+    x_min: float,
+    gap: float,
+    attempts: int,
+) -> list[Footprint] | None:
+    """Random sequential addition, largest footprint first; None when an object does not fit."""
+    placed: dict[int, Footprint] = {}
+    for k in sorted(range(len(shapes)), key=lambda i: -shapes[i].area):
+        s = shapes[k]
+        b = s.bound
+        if 2 * b > min(depth, width):
+            return None
+        for _ in range(attempts):
+            centre = (
+                float(rng.uniform(x_min + b, x_min + depth - b)),
+                float(rng.uniform(-width / 2 + b, width / 2 - b)),
+            )
+            yaw = float(rng.uniform(-math.pi / 2, math.pi / 2)) if s.box else 0.0
+            fp = (
+                Footprint(centre, yaw=yaw, half_size=(s.sx / 2, s.sy / 2))
+                if s.box
+                else Footprint(centre, radius=s.radius)
+            )
+            near = (
+                f
+                for f in placed.values()
+                if math.dist(f.center, centre) <= b + _bound(f) + gap  # cheap bounding test
+            )
+            if not any(overlap(fp, f, gap) for f in near):
+                placed[k] = fp
+                break
+        else:
+            return None
+    return [placed[k] for k in range(len(shapes))]
+
+
+def _bound(fp: Footprint) -> float:
+    return fp.radius if fp.is_circle else math.hypot(*fp.half_size)
+
+
+def _in_clutter(k: int, footprints: list[Footprint], shapes: list[_Shape]) -> bool:
+    """Object k has a neighbour nearer the base in its approach corridor and one farther away."""
+    c = np.asarray(footprints[k].center)
+    reach = float(np.linalg.norm(c))
+    axis = c / reach
+    blocked = farther = False
+    for i, fp in enumerate(footprints):
+        if i == k:
+            continue
+        d = np.asarray(fp.center)
+        along = float(d @ axis)
+        lateral = abs(float(d[0] * axis[1] - d[1] * axis[0]))
+        if along < reach and lateral < CORRIDOR_HALF_WIDTH_M + shapes[i].bound:
+            blocked = True
+        if float(np.linalg.norm(d)) > reach:
+            farther = True
+    return blocked and farther
+
+
+def _pick_target(
+    rng: np.random.Generator, footprints: list[Footprint], shapes: list[_Shape]
+) -> int | None:
+    """Index of the target: among the clutter if possible, always inside the workspace."""
+    inside = [k for k, fp in enumerate(footprints) if in_side_grasp_workspace(fp.center)]
+    if not inside:
+        return None
+    if len(footprints) > 1:
+        far = max(range(len(footprints)), key=lambda k: math.hypot(*footprints[k].center))
+        inside = [k for k in inside if k != far] or inside
+    cluttered = [k for k in inside if _in_clutter(k, footprints, shapes)]
+    pool = cluttered or inside
+    return int(pool[int(rng.integers(len(pool)))])
 
 
 def generate_clutter(
@@ -31,76 +221,96 @@ def generate_clutter(
     density: float,
     seed: int,
     *,
-    radius_range: tuple[float, float] = (0.025, 0.035),
-    height_range: tuple[float, float] = (0.10, 0.18),
+    radius_range: tuple[float, float] = (0.02, 0.05),
+    height_range: tuple[float, float] = (0.08, 0.25),
+    box_share: float = 0.3,
     gap: float = 0.01,
     x_min: float = 0.35,
-    attempts: int = 2000,
+    attempts: int = 3000,
 ) -> Scenario:
-    """Random non-overlapping cylinders in front of the robot; the same seed gives the same scene.
+    """Random non-overlapping household-sized objects in front of the robot, seeded.
 
     Args:
         n_objects: number of obstacles N_o (≥ 0); one target is added.
-        density: total cylinder footprint / region area, in (0, 0.4].
-        seed: seed of the numpy generator.
-        radius_range: cylinder radii are uniform in this range [m].
-        height_range: cylinder heights are uniform in this range [m].
-        gap: minimum free distance between two cylinders [m], > 0.
+        density: total footprint area / clutter region area, in (0, 0.4] (0.1–0.35 realistic).
+        seed: seed of the numpy generator; the same arguments give the same scene.
+        radius_range: cylinder radii, and half the box edges, are uniform in this range [m].
+        height_range: object heights are uniform in this range [m].
+        box_share: probability that an object is a box (random yaw) instead of a cylinder [-].
+        gap: minimum free distance between two footprints [m], > 0.
         x_min: near edge of the region [m] (clear of the robot keep-out disc).
-        attempts: placement tries per object before the scene is declared too dense.
+        attempts: placement tries per object and layout; at most ``LAYOUT_RESTARTS`` layouts
+            are tried, so the generator always terminates.
 
     Returns:
         A validated scenario named ``gen_<n>_<density>_<seed>``.
 
     Raises:
-        ScenarioError: bad arguments, or no placement found (density too high).
+        ScenarioError: an argument out of range (field = its name), or no layout found within the
+            budget (field ``'density'``: too dense to pack) or no object landed in the side-grasp
+            workspace (field ``'density'``).
     """
-    source = 'generate_clutter'
-    if isinstance(n_objects, bool) or not isinstance(n_objects, int) or n_objects < 0:
-        raise ScenarioError(source, 'n_objects', f'must be an int ≥ 0, got {n_objects!r}')
-    if not (math.isfinite(density) and 0 < density <= MAX_DENSITY):
-        raise ScenarioError(source, 'density', f'must be in (0, {MAX_DENSITY}], got {density}')
-    lo_r, hi_r = radius_range
-    if not (0 < lo_r <= hi_r and 0 < height_range[0] <= height_range[1] and gap > 0):
-        raise ScenarioError(source, 'radius_range', 'sizes and gap must be positive and ordered')
-    rng = np.random.default_rng(seed)
+    _check_arguments(n_objects, density, radius_range, height_range, box_share, gap)
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ScenarioError('generate_clutter', 'seed', f'must be an int ≥ 0, got {seed!r}')
+    rng = np.random.default_rng(int(seed))
     n = n_objects + 1
-    radii = rng.uniform(lo_r, hi_r, n)
-    heights = rng.uniform(*height_range, n)
-    area = float(np.sum(np.pi * (radii + gap / 2) ** 2)) / density  # [m²]
-    depth = math.sqrt(area / ASPECT)
-    width = ASPECT * depth
-    centers: list[np.ndarray] = []
-    for k in range(n):
-        r = radii[k]
-        for _ in range(attempts):
-            c = np.array(
-                [
-                    rng.uniform(x_min + r, x_min + depth - r),
-                    rng.uniform(-width / 2 + r, width / 2 - r),
-                ]
-            )
-            if all(np.hypot(*(c - o)) > r + radii[i] + gap for i, o in enumerate(centers)):
-                centers.append(c)
+    shapes = _draw_shapes(rng, n, radius_range, height_range, box_share)
+    depth, width = region_size(sum(s.area for s in shapes), float(density))
+    smallest = (2 * max(s.bound for s in shapes) + gap) * math.sqrt(n) * 1.5
+    if n <= SMALL_SCENE and depth < smallest:  # room for a tiny scene's objects
+        depth, width = smallest, ASPECT * smallest
+    footprints, target = None, None
+    for _ in range(LAYOUT_RESTARTS):
+        footprints = _layout(rng, shapes, depth, width, x_min, gap, attempts)
+        if footprints is not None:
+            target = _pick_target(rng, footprints, shapes)
+            if target is not None:
                 break
-        else:
-            problem = f'cannot place {n} cylinders at density {density}; lower it'
-            raise ScenarioError(source, 'density', problem)
-    order = np.argsort([-np.hypot(*c) for c in centers])  # farthest first: the target
+    if footprints is None:
+        problem = f'cannot pack {n} objects at density {density} in {LAYOUT_RESTARTS} tries'
+        raise ScenarioError('generate_clutter', 'density', problem + '; lower it')
+    if target is None:
+        problem = f'no object landed in the side-grasp workspace at density {density}'
+        raise ScenarioError('generate_clutter', 'density', problem + '; raise it')
+    scenario = _assemble(n_objects, density, seed, shapes, footprints, target, depth, width, x_min)
+    validate_scenario(scenario)
+    return scenario
+
+
+def _assemble(
+    n_objects: int,
+    density: float,
+    seed: int,
+    shapes: list[_Shape],
+    footprints: list[Footprint],
+    target: int,
+    depth: float,
+    width: float,
+    x_min: float,
+) -> Scenario:
+    others = sorted(
+        (k for k in range(len(shapes)) if k != target),
+        key=lambda k: math.hypot(*footprints[k].center),
+    )
     objects = []
-    for rank, k in enumerate(order):
-        x, y = (float(v) for v in centers[k])
-        objects.append(
-            ObjectSpec(
-                id='T' if rank == 0 else f'O{n - rank}',
-                role='target' if rank == 0 else 'obstacle',
-                shape='cylinder',
-                position=(x, y, float(heights[k]) / 2),
-                radius=float(radii[k]),
-                height=float(heights[k]),
+    for rank, k in enumerate([*others, target], start=1):
+        s, fp = shapes[k], footprints[k]
+        is_target = k == target
+        position = (fp.center[0], fp.center[1], s.height / 2)
+        common = {
+            'id': 'T' if is_target else f'O{rank}',
+            'role': 'target' if is_target else 'obstacle',
+            'position': position,
+        }
+        if s.box:
+            objects.append(
+                ObjectSpec(shape='box', yaw=fp.yaw, size=(s.sx, s.sy, s.height), **common)
             )
-        )
-    objects = [*objects[1:][::-1], objects[0]]  # O1 (nearest) … O_n, then T
+        else:
+            objects.append(
+                ObjectSpec(shape='cylinder', radius=s.radius, height=s.height, **common)
+            )
     x_max = x_min + depth + TABLE_MARGIN
     half_y = max(DROP_ZONE_CENTER[1] + DROP_ZONE_SIZE[1] / 2, width / 2) + TABLE_MARGIN
     table = ObjectSpec(
@@ -110,13 +320,14 @@ def generate_clutter(
         position=((TABLE_X_MIN + x_max) / 2, 0.0, -0.025),
         size=(x_max - TABLE_X_MIN, 2 * half_y, 0.05),
     )
-    scenario = Scenario(
+    return Scenario(
         name=f'gen_{n_objects}_{density:g}_{seed}',
         objects=(*objects, table),
         drop_zone_center=DROP_ZONE_CENTER,
         drop_zone_size=DROP_ZONE_SIZE,
         home=tuple(float(v) for v in HOME),
-        description=f'generate_clutter(n_objects={n_objects}, density={density}, seed={seed})',
+        description=(
+            f'generate_clutter(n_objects={n_objects}, density={density}, seed={seed}): '
+            f'region x [{x_min:.3f}, {x_min + depth:.3f}] m, |y| ≤ {width / 2:.3f} m'
+        ),
     )
-    validate_scenario(scenario)
-    return scenario

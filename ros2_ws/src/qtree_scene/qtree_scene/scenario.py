@@ -52,6 +52,7 @@ from qtree_scene.scene import ObjectSpec, Scenario
 
 TABLE_ID = 'table'
 DEFAULT_KEEPOUT = 0.2  # [m]
+MAX_OBJECTS = 500  # most objects of one scene, table included (validation is O(n²)) [-]
 SCENARIO_DIR = pathlib.Path(__file__).resolve().parent / 'scenarios'
 _TOP = {'name', 'description', 'home', 'robot_keepout_radius', 'table', 'drop_zone', 'objects'}
 _BOX = {'center_xy', 'size'}
@@ -134,6 +135,7 @@ def parse_scenario(data: Any, source: str = '') -> Scenario:
     )
     if not isinstance(data['objects'], list) or not data['objects']:
         fail('objects', 'must be a non-empty list')
+    check_object_count(len(data['objects']) + 1, fail)  # + the table
     objects = [_parse_object(o, f'objects[{i}]', fail) for i, o in enumerate(data['objects'])]
     description = data.get('description')
     description = '' if description is None else description  # `description:` left empty
@@ -158,13 +160,28 @@ def parse_scenario(data: Any, source: str = '') -> Scenario:
     return scenario
 
 
-def validate_scenario(scenario: Scenario) -> None:
-    """Check the geometry and roles of a scenario built in code or from a file.
+def check_object_count(count: int, fail: Callable[..., Any]) -> None:
+    """Fail (field ``objects``) when a scene has more than :data:`MAX_OBJECTS` objects."""
+    if count > MAX_OBJECTS:
+        fail('objects', f'{count} objects, at most {MAX_OBJECTS} are accepted (table included)')
+
+
+def validate_scenario(
+    scenario: Scenario, source: str | None = None, position_field: str = 'xy'
+) -> None:
+    """Check the geometry and roles of a scenario built in code, from a file or from a message.
+
+    Args:
+        scenario: the scenario; ``scenario.objects[i]`` is reported as ``objects[i]``.
+        source: prefix of the error messages (default: the scenario's file, else its name).
+        position_field: name of an object's position field in the input the scenario came from
+            (``xy`` in YAML files, ``pose.position`` in a Scene message).
 
     Raises:
         ScenarioError: see the module docstring for the rules.
     """
-    fail = _failer(scenario.source or scenario.name)
+    fail = _failer(scenario.source or scenario.name if source is None else source)
+    check_object_count(len(scenario.objects), fail)
     movable = [(i, o) for i, o in enumerate(scenario.objects) if o.id != TABLE_ID]
     seen: dict[str, int] = {}
     for i, obj in enumerate(scenario.objects):
@@ -192,31 +209,40 @@ def validate_scenario(scenario: Scenario) -> None:
         center=scenario.drop_zone_center[:2],
         half_size=(scenario.drop_zone_size[0] / 2, scenario.drop_zone_size[1] / 2),
     )
-    _check_on_table_and_clear(zone, 'drop_zone', table_fp, scenario.robot_keepout_radius, fail)
+    _check_on_table_and_clear(
+        zone, 'drop_zone', 'the drop zone', table_fp, scenario.robot_keepout_radius, fail
+    )
     footprints = []
     for i, obj in movable:
         fp = footprint_of(obj)
         _check_on_table_and_clear(
-            fp, f'objects[{i}]', table_fp, scenario.robot_keepout_radius, fail
+            fp, f'objects[{i}]', repr(obj.id), table_fp, scenario.robot_keepout_radius, fail
         )
         if overlap(fp, zone):
-            fail(f'objects[{i}].xy', f'{obj.id!r} overlaps the drop zone')
+            fail(f'objects[{i}].{position_field}', f'{obj.id!r} overlaps the drop zone')
         for j, other in footprints:
             if overlap(fp, other):
-                fail(f'objects[{i}].xy', f'{obj.id!r} overlaps {scenario.objects[j].id!r}')
+                problem = f'{obj.id!r} overlaps {scenario.objects[j].id!r}'
+                fail(f'objects[{i}].{position_field}', problem)
         footprints.append((i, fp))
 
 
 def _check_on_table_and_clear(
-    fp: Footprint, field: str, table: Footprint, keepout: float, fail: Callable[..., Any]
+    fp: Footprint,
+    field: str,
+    name: str,
+    table: Footprint,
+    keepout: float,
+    fail: Callable[..., Any],
 ) -> None:
     if table.distance_to_point(fp.center) > 0.0:
-        fail(f'{field}', f'centre {fp.center} is not on the table')
+        fail(field, f'{name}: centre {fp.center} is not on the table')
     clearance = fp.distance_to_point((0.0, 0.0))
     if clearance < keepout:
-        fail(
-            f'{field}', f'{clearance:.3f} m from the robot base axis, keep-out radius {keepout} m'
+        problem = (
+            f'{name}: {clearance:.3f} m from the robot base axis, keep-out radius {keepout} m'
         )
+        fail(field, problem)
 
 
 def _parse_object(data: Any, field: str, fail: Callable[..., Any]) -> ObjectSpec:

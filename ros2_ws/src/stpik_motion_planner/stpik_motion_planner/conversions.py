@@ -11,65 +11,17 @@ import math
 import numpy as np
 from builtin_interfaces.msg import Duration, Time
 from geometry_msgs.msg import Pose, PoseArray
-from jaco2_description.model import ARM_JOINTS, HOME
-from qtree_msgs.msg import ObjectState, PlanningEvent, Scene
+from jaco2_description.model import ARM_JOINTS
+from qtree_msgs.msg import PlanningEvent
 from qtree_msgs.srv import RelocateObject
 from qtree_node_support.text import clip
-from qtree_scene.scene import ObjectSpec, Scenario
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from stpik_motion_planner.result import PlanResult
 from stpik_motion_planner.scene_checks import MAX_ID_CHARS, MAX_RELOCATED_IDS
 
-ROLES = {
-    ObjectState.ROLE_TARGET: 'target',
-    ObjectState.ROLE_OBSTACLE: 'obstacle',
-    ObjectState.ROLE_STATIC: 'static',
-}
-SHAPES = {ObjectState.SHAPE_CYLINDER: 'cylinder', ObjectState.SHAPE_BOX: 'box'}
 EE_FRAME = 'j2s7s300_link_base'  # frame of the answered end-effector path
-
-
-def _yaw(pose: Pose) -> float:
-    q = pose.orientation
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-
-
-def scenario_from_msg(
-    msg: Scene,
-    home: tuple[float, ...] = tuple(HOME),
-    original: dict[str, tuple[float, float, float]] | None = None,
-) -> Scenario:
-    """Scene message → :class:`Scenario` (objects not IN_CLUTTER keep their ``original`` pose).
-
-    Raises:
-        ValueError: unknown role or shape code.
-    """
-    objects = []
-    for o in msg.objects:
-        if o.role not in ROLES or o.shape not in SHAPES:
-            raise ValueError(f'object {o.id!r}: unknown role {o.role} or shape {o.shape}')
-        p = o.pose.position
-        position = (p.x, p.y, p.z)
-        if o.status != ObjectState.STATUS_IN_CLUTTER and original and o.id in original:
-            position = original[o.id]
-        size = (o.box_size.x, o.box_size.y, o.box_size.z)
-        objects.append(
-            ObjectSpec(
-                o.id,
-                ROLES[o.role],
-                SHAPES[o.shape],
-                position,
-                _yaw(o.pose),
-                o.radius,
-                o.height,
-                size,
-            )
-        )
-    c = msg.drop_zone.position
-    s = msg.drop_zone_size
-    return Scenario(msg.scenario_name, tuple(objects), (c.x, c.y, c.z), (s.x, s.y, s.z), home)
 
 
 def trajectory_msg(times: np.ndarray, q: np.ndarray) -> JointTrajectory:
@@ -134,6 +86,8 @@ def fill_relocate_response(
     response.from_cache = result.from_cache
     response.trajectory = trajectory_msg(result.times, result.joint_trajectory)
     response.ee_path = pose_array_msg(result.ee_path, EE_FRAME)
+    response.blocking_ids = list(result.blocking_ids)
+    response.blocked_by_immovable = result.blocked_by_immovable
     return response
 
 

@@ -32,10 +32,12 @@ import sys
 import threading
 import time
 
-from qtree_msgs.msg import ObjectState, PlanningEvent, Scene
+from qtree_msgs.msg import PlanningEvent, Scene
 from qtree_msgs.srv import RelocateObject
 from qtree_node_support.lifecycle import run_node
 from qtree_node_support.qos import SERVICE_QOS
+from qtree_scene.message import scenario_from_msg
+from qtree_scene.scene import ObjectSpec
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
@@ -48,7 +50,6 @@ from stpik_motion_planner.conversions import (
     fill_relocate_response,
     planning_event_msg,
     range_descriptor,
-    scenario_from_msg,
 )
 from stpik_motion_planner.exceptions import MotionPlannerError
 from stpik_motion_planner.execution import TrajectoryExecution
@@ -105,7 +106,7 @@ class MotionPlannerNode(Node):
         self._planner: MotionPlanner | None = None
         self._scene_error = ''
         self._geometry: tuple | None = None
-        self._original: dict[str, tuple[float, float, float]] = {}
+        self._original: dict[str, ObjectSpec] = {}  # objects as last seen IN_CLUTTER
         # Own groups, so that waiting requests never hold back the state, scene or attach answer.
         self.create_subscription(
             Scene,
@@ -152,10 +153,6 @@ class MotionPlannerNode(Node):
             self._rebuild(msg)
 
     def _rebuild(self, msg: Scene) -> None:
-        for o in msg.objects:
-            if o.status == ObjectState.STATUS_IN_CLUTTER or o.id not in self._original:
-                p = o.pose.position
-                self._original.setdefault(o.id, (p.x, p.y, p.z))
         try:
             scenario = scenario_from_msg(msg, original=self._original)
             geometry = (scenario.name, scenario.objects, scenario.drop_zone_center)
@@ -168,8 +165,9 @@ class MotionPlannerNode(Node):
             self.get_logger().warning(f'scene rejected: {err}')
         with self._lock:
             self._planner, self._geometry = planner, geometry
-        self._original = {o.id: o.position for o in scenario.objects} if planner else {}
-        self.get_logger().info(f'scene {msg.scenario_name!r}: planner rebuilt')
+        self._original = {o.id: o for o in scenario.objects} if planner else {}
+        if planner is not None:
+            self.get_logger().info(f'scene {msg.scenario_name!r}: planner rebuilt')
 
     def _on_relocate(self, request, response):
         received = time.monotonic()

@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -18,6 +18,7 @@ from jaco2_description.model import Jaco2Model
 from ompl import util as ou
 from qtree_scene.scene import ObjectSpec, Scenario
 
+from stpik_motion_planner.blockers import BlockerFinder
 from stpik_motion_planner.cache import FeasibilityCache
 from stpik_motion_planner.cartesian_path import (
     HAND_CENTRE_M,
@@ -73,6 +74,7 @@ class MotionPlanner:
         self.robot = model if model is not None else Jaco2Model()
         self.stpik = Stpik(self.robot, self.config)
         self.cache = FeasibilityCache()
+        self.blockers = BlockerFinder(self)
         self.home_q = np.asarray(scenario.home, dtype=float)
         self.home_pose = pin.SE3(self.robot.ee_pose(self.home_q))
         if not _OMPL_SEEDED:  # OMPL takes one global seed per process (first call only)
@@ -89,6 +91,7 @@ class MotionPlanner:
         if answer is not None:
             return answer
         result = self.plan(object_id, relocated)
+        result = self.blockers.annotate(result, object_id, relocated)  # infeasible: who blocks
         if result.reason != Reason.TIMEOUT:  # a timeout may pass on a quieter machine
             self.cache.put(object_id, relocated, result)
         return result
@@ -121,8 +124,11 @@ class MotionPlanner:
         half = obj.height / 2 if obj.shape == 'cylinder' else obj.size[2] / 2
         return np.array([x, y, centre[2] - size[2] / 2 + half])
 
-    def plan(self, object_id: str, relocated: list[str]) -> PlanResult:
-        """Plan without the cache (the request must be valid)."""
+    def plan(
+        self, object_id: str, relocated: list[str], yaws: Sequence[float] | None = None
+    ) -> PlanResult:
+        """Plan without the cache (the request must be valid); ``yaws`` [rad] overrides the
+        candidate approach yaws."""
         c = self.config
         start = time.perf_counter()
         deadline = start + c.time_limit_s
@@ -135,7 +141,9 @@ class MotionPlanner:
         centre = np.asarray(obj.position, dtype=float)
         failures: list[MotionPlannerError] = []
         try:
-            for yaw in approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad):
+            if yaws is None:
+                yaws = approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad)
+            for yaw in yaws:
                 t0 = time.perf_counter()
                 path = self._sample(sampler, scene, obj, yaw, slot, failures)
                 timings['sampling'] += time.perf_counter() - t0

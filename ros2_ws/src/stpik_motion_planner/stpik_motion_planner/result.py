@@ -52,6 +52,9 @@ class PlanResult:
         timings: wall time by stage: ``'sampling'``, ``'stpik'``, ``'collision'`` [s].
         from_cache: True when answered from the feasibility cache.
         approach_yaw: yaw of the approach axis used for the grasp [rad] (NaN if none).
+        blocking_ids: infeasible planning answers: the movable objects whose removal the planner
+            believes necessary for its most promising approach (see :mod:`.blockers`).
+        blocked_by_immovable: no approach works even with every movable object removed.
     """
 
     feasible: bool
@@ -66,3 +69,5 @@ class PlanResult:
     timings: dict[str, float] = field(default_factory=dict)
     from_cache: bool = False
     approach_yaw: float = float('nan')
+    blocking_ids: tuple[str, ...] = ()
+    blocked_by_immovable: bool = False

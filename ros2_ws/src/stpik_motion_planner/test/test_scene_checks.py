@@ -59,9 +59,9 @@ def test_format_id_cuts_long_ids():
     ids=['10000 copies', '10000 unknown', '10000 empty', '100 kB id', '300 huge ids', 'dups'],
 )
 def test_huge_requests_get_short_messages(planner, object_id, relocated, reason, fragment):
-    start = time.perf_counter()
+    start = time.process_time()
     result = planner.check(object_id, relocated)
-    assert time.perf_counter() - start < 0.5
+    assert time.process_time() - start < 0.5
     assert (result.feasible, result.reason) == (False, reason)
     assert fragment in result.message and len(result.message) < MESSAGE_CHARS, result.message
     assert planner.cache.misses == 0

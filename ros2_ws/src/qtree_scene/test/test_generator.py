@@ -1,0 +1,111 @@
+"""generate_clutter guarantees: seeded, household sizes, target in the workspace, densities."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from qtree_scene.exceptions import ScenarioError
+from qtree_scene.footprint import footprint_of, overlap
+from qtree_scene.generator import (
+    footprint_area,
+    generate_clutter,
+    in_side_grasp_workspace,
+    region_size,
+)
+
+SCENES = st.tuples(
+    st.integers(min_value=4, max_value=30),
+    st.floats(min_value=0.1, max_value=0.35),
+    st.integers(min_value=0, max_value=2**31),
+)
+
+
+@settings(max_examples=40, deadline=None)
+@given(scene=SCENES)
+def test_sizes_density_and_target_placement(scene) -> None:
+    n, density, seed = scene
+    scenario = generate_clutter(n, density, seed)
+    movable = [*scenario.obstacles, scenario.target]
+    assert len(movable) == n + 1
+    for o in movable:
+        if o.shape == 'cylinder':
+            assert 0.02 <= o.radius <= 0.05 and 0.08 <= o.height <= 0.25
+        else:
+            assert all(0.04 <= v <= 0.10 for v in o.size[:2]) and 0.08 <= o.size[2] <= 0.25
+        assert o.position[2] == pytest.approx((o.height or o.size[2]) / 2)  # on the table
+    # The footprints fill the clutter region at the requested density.
+    area = sum(footprint_area(o) for o in movable)
+    depth, width = region_size(area, density)
+    assert area / (depth * width) == pytest.approx(density)
+    for o in movable:
+        assert 0.35 <= o.position[0] <= 0.35 + depth and abs(o.position[1]) <= width / 2
+    # Target inside the side-grasp workspace, never the farthest object.
+    target = scenario.target
+    assert in_side_grasp_workspace(target.position)
+    reach = [math.hypot(*o.position[:2]) for o in movable]
+    assert math.hypot(*target.position[:2]) < max(reach)
+    footprints = [footprint_of(o) for o in movable]
+    for i, a in enumerate(footprints):
+        assert not any(overlap(a, b, 0.0099) for b in footprints[i + 1 :])
+
+
+def test_seeded_and_reproducible() -> None:
+    a = generate_clutter(20, 0.25, 7)
+    assert a == generate_clutter(20, 0.25, 7)
+    assert a != generate_clutter(20, 0.25, 8)
+
+
+def test_boxes_and_cylinders_both_appear() -> None:
+    shapes = {o.shape for s in range(5) for o in generate_clutter(20, 0.2, s).obstacles}
+    assert shapes == {'cylinder', 'box'}
+    only_cylinders = generate_clutter(20, 0.2, 0, box_share=0.0)
+    assert {o.shape for o in only_cylinders.obstacles} == {'cylinder'}
+
+
+def test_target_among_the_clutter_in_most_scenes() -> None:
+    """Some object stands between the base and the target (in its corridor) in most scenes."""
+    covered = 0
+    for seed in range(20):
+        s = generate_clutter(15, 0.25, seed)
+        t = s.target.position
+        reach = math.hypot(t[0], t[1])
+        ax, ay = t[0] / reach, t[1] / reach
+        for o in s.obstacles:
+            along = o.position[0] * ax + o.position[1] * ay
+            lateral = abs(o.position[0] * ay - o.position[1] * ax)
+            if along < reach and lateral < 0.1:
+                covered += 1
+                break
+    assert covered >= 18
+
+
+@pytest.mark.parametrize(
+    ('kwargs', 'field'),
+    [
+        ({'n_objects': -1}, 'n_objects'),
+        ({'n_objects': 2.5}, 'n_objects'),
+        ({'density': 0.0}, 'density'),
+        ({'density': 0.5}, 'density'),
+        ({'density': math.nan}, 'density'),
+        ({'seed': -3}, 'seed'),
+        ({'radius_range': (0.05, 0.02)}, 'radius_range'),
+        ({'radius_range': (0.0, 0.02)}, 'radius_range'),
+        ({'height_range': (0.08, 2.0)}, 'height_range'),
+        ({'box_share': 1.5}, 'box_share'),
+        ({'gap': 0.0}, 'gap'),
+    ],
+)
+def test_bad_arguments_name_the_field(kwargs: dict, field: str) -> None:
+    args = {'n_objects': 10, 'density': 0.2, 'seed': 0, **kwargs}
+    with pytest.raises(ScenarioError) as err:
+        generate_clutter(**args)
+    assert err.value.field == field
+
+
+def test_unpackable_density_is_a_clear_error_not_a_hang() -> None:
+    with pytest.raises(ScenarioError, match='cannot pack') as err:
+        generate_clutter(40, 0.4, 0, radius_range=(0.07, 0.08), attempts=50)
+    assert err.value.field == 'density'

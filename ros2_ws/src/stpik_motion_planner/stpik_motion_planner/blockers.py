@@ -1,0 +1,187 @@
+"""Blockers of an infeasible relocation: which movable objects stand in the way (no ROS import).
+
+For every candidate approach yaw of an object (the planner's own ``approach_yaws``) the planner
+is run once in the scene with every movable object removed (statics only). An approach that
+fails there is blocked by something immovable (reach, joint limits, the table). An approach that
+succeeds gives a whole motion (pre-grasp, grasp, lift, carry with the object attached, place,
+return); the arm and the carried object are swept densely along it and the distance of every
+movable object of the full scene to the sweep is kept. Both are cached per object: they do not
+depend on which objects are relocated.
+
+For a request ``(relocated, object)`` the blockers of an approach are the objects, not yet
+relocated, closer than :data:`HIT_MARGIN_M` to its sweep. The answer is the approach with the
+fewest blockers (ties: the planner's yaw order); its blockers sorted nearest the base first.
+When every working approach is free of blockers at that margin (the planner failed although the
+swept motion is clear: its own Cartesian path differed), the objects within
+:data:`NEAR_MARGIN_M` of the best sweep are named instead. No working approach at all gives
+``blocked_by_immovable=True`` and no ids.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterable
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pinocchio as pin
+
+from stpik_motion_planner.collision import SceneWorld
+from stpik_motion_planner.result import PlanResult
+
+if TYPE_CHECKING:
+    from stpik_motion_planner.planner import MotionPlanner
+
+HIT_MARGIN_M = 0.01  # an object closer than this to the swept arm blocks the approach [m]
+NEAR_MARGIN_M = 0.05  # fallback: objects this close to the sweep deflect the arm [m]
+SWEEP_STEP_RAD = 0.05  # largest joint change between two swept configurations [rad]
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """One candidate approach of one object, planned with every movable object removed.
+
+    Attributes:
+        yaw: approach yaw [rad].
+        works: the motion exists in the statics-only scene.
+        distances: movable object id -> smallest distance to the swept arm or carried object
+            [m], only objects closer than :data:`NEAR_MARGIN_M`.
+    """
+
+    yaw: float
+    works: bool
+    distances: dict[str, float]
+
+    def blockers(self, relocated: frozenset[str], margin: float) -> list[str]:
+        """Ids within ``margin`` [m] of the sweep that are not relocated."""
+        return [i for i, d in self.distances.items() if d <= margin and i not in relocated]
+
+
+@dataclass(frozen=True)
+class Blockers:
+    """The blockers of one request.
+
+    Attributes:
+        ids: objects whose removal the planner believes necessary, nearest the base first.
+        immovable: no approach works even with every movable object removed.
+        yaw: yaw of the chosen approach [rad] (NaN when ``immovable``).
+    """
+
+    ids: tuple[str, ...]
+    immovable: bool
+    yaw: float = float('nan')
+
+
+class BlockerFinder:
+    """Blockers for the requests of one :class:`~stpik_motion_planner.planner.MotionPlanner`.
+
+    Attributes:
+        sweeps: per object id, one :class:`Sweep` per candidate approach (lazily filled).
+        time_s: total wall time spent computing sweeps [s].
+    """
+
+    def __init__(self, planner: MotionPlanner) -> None:
+        self.planner = planner
+        self.sweeps: dict[str, list[Sweep]] = {}
+        self.time_s = 0.0
+
+    def find(self, object_id: str, relocated: Iterable[str]) -> Blockers:
+        """Blockers of relocating ``object_id`` once ``relocated`` are gone (valid request)."""
+        done = frozenset(relocated)
+        sweeps = self._sweeps(object_id)
+        working = [s for s in sweeps if s.works]
+        if not working:
+            return Blockers((), True)
+        best = min(working, key=lambda s: len(s.blockers(done, HIT_MARGIN_M)))
+        ids = best.blockers(done, HIT_MARGIN_M)
+        if not ids:
+            ids = best.blockers(done, NEAR_MARGIN_M)
+        scenario = self.planner.scenario
+        ids.sort(key=lambda i: (math.hypot(*scenario.object(i).position[:2]), i))
+        return Blockers(tuple(ids), False, best.yaw)
+
+    def annotate(self, result: PlanResult, object_id: str, relocated: Iterable[str]) -> PlanResult:
+        """``result`` with its blockers when it is an infeasible planning answer (2xx)."""
+        if result.feasible or not 200 <= int(result.reason) < 300:
+            return result
+        start = time.perf_counter()
+        found = self.find(object_id, relocated)
+        spent = time.perf_counter() - start
+        timings = {**result.timings, 'blockers': spent}
+        if found.immovable:
+            message = f'{result.message}; blocked by nothing movable (no approach in reach)'
+        elif found.ids:
+            message = f'{result.message}; blockers: {", ".join(found.ids[:5])}'
+        else:
+            message = f'{result.message}; no blocker found'
+        return replace(
+            result,
+            message=message,
+            blocking_ids=found.ids,
+            blocked_by_immovable=found.immovable,
+            planning_time=result.planning_time + spent,
+            timings=timings,
+        )
+
+    def _sweeps(self, object_id: str) -> list[Sweep]:
+        if object_id not in self.sweeps:
+            start = time.perf_counter()
+            self.sweeps[object_id] = self._compute(object_id)
+            self.time_s += time.perf_counter() - start
+        return self.sweeps[object_id]
+
+    def _compute(self, object_id: str) -> list[Sweep]:
+        from stpik_motion_planner.cartesian_path import approach_yaws
+
+        planner = self.planner
+        c = planner.config
+        scenario = planner.scenario
+        obj = scenario.object(object_id)
+        movable = [o for o in scenario.objects if o.role != 'static' and o.id != object_id]
+        others = [o.id for o in movable]
+        full = SceneWorld(movable)
+        out = []
+        centre = np.asarray(obj.position, dtype=float)
+        for yaw in approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad):
+            result = planner.plan(object_id, others, yaws=[yaw])
+            if not result.feasible:
+                out.append(Sweep(yaw, False, {}))
+                continue
+            out.append(Sweep(yaw, True, self._distances(result, obj, full)))
+        return out
+
+    def _distances(self, result: PlanResult, obj, scene: SceneWorld) -> dict[str, float]:
+        """Smallest distance of each movable object to the arm along ``result``'s motion [m]."""
+        stpik = self.planner.stpik
+        robot = self.planner.robot
+        q = result.joint_trajectory
+        world_obj = pin.SE3(
+            pin.rpy.rpyToMatrix(0.0, 0.0, obj.yaw), np.asarray(obj.position, dtype=float)
+        )
+        offset = pin.SE3(robot.ee_pose(q[result.grasp_index])).actInv(world_obj)
+        found: dict[str, float] = {}
+        try:
+            for index in range(1, len(q)):
+                if index == result.grasp_index + 1:
+                    stpik.bodies.attach(obj, offset, settle_m=0.0)
+                if index == result.release_index + 1:
+                    stpik.bodies.detach()
+                a, b = q[index - 1], q[index]
+                n = max(1, math.ceil(float(np.max(np.abs(b - a))) / SWEEP_STEP_RAD))
+                for t in np.arange(1, n + 1) / n:
+                    for p in self._near(a + (b - a) * t, scene):
+                        found[p.name_b] = min(found.get(p.name_b, math.inf), p.distance)
+        finally:
+            stpik.bodies.detach()
+        return {i: d for i, d in found.items() if d <= NEAR_MARGIN_M}
+
+    def _near(self, q: np.ndarray, scene: SceneWorld) -> list:
+        """(arm body, object) pairs closer than :data:`NEAR_MARGIN_M` at ``q`` [rad] (7,)."""
+        s = self.planner.stpik
+        pin.forwardKinematics(s.model, s.data, q)
+        pin.updateFramePlacements(s.model, s.data)
+        pin.updateGeometryPlacements(s.model, s.data, s.geometry_model, s.geometry_data)
+        s.bodies.place(s.geometry_data.oMg, s.data.oMf[s.ee_frame])
+        return s.bodies.scene_proximities(scene, NEAR_MARGIN_M)

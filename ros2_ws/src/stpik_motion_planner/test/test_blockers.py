@@ -1,0 +1,62 @@
+"""Blockers of infeasible answers (blocking_ids, blocked_by_immovable) on hand-built scenes."""
+
+from __future__ import annotations
+
+import pytest
+from qtree_scene.scene import ObjectSpec, Scenario
+from stpik_motion_planner.planner import MotionPlanner
+from stpik_motion_planner.result import Reason
+
+HOME = (4.71, 2.84, 0.0, 0.75, 4.62, 4.48, 4.88)
+
+
+def _scene(*objects: ObjectSpec, table_x: float = 1.2) -> Scenario:
+    table = ObjectSpec('table', 'static', 'box', (table_x / 2 - 0.25, 0.0, -0.025),
+                       size=(table_x + 0.5, 1.4, 0.05))  # fmt: skip
+    return Scenario('blockers', (*objects, table), (0.0, 0.5, 0.15), (0.3, 0.3, 0.3), HOME)
+
+
+@pytest.fixture(scope='module')
+def behind_one(make_cylinder, robot):
+    """T at 0.62 m straight ahead, O1 right in front of it, O2 far to the side."""
+    scene = _scene(
+        make_cylinder('T', 0.62, 0.0, 'target'),
+        make_cylinder('O1', 0.52, 0.0),
+        make_cylinder('O2', 0.45, -0.35),
+    )
+    return MotionPlanner(scene, model=robot)
+
+
+def test_target_behind_one_obstacle_is_blocked_by_it(behind_one):
+    result = behind_one.check('T', [])
+    assert not result.feasible and 200 <= result.reason < 300
+    assert result.blocking_ids == ('O1',)
+    assert not result.blocked_by_immovable
+    assert 'blockers: O1' in result.message
+    cleared = behind_one.check('T', ['O1'])
+    assert cleared.feasible and cleared.blocking_ids == () and not cleared.blocked_by_immovable
+
+
+def test_cached_answer_keeps_its_blockers(behind_one):
+    first = behind_one.check('T', [])
+    again = behind_one.check('T', [])
+    assert again.from_cache and again.blocking_ids == first.blocking_ids == ('O1',)
+
+
+def test_out_of_reach_is_blocked_by_nothing_movable(make_cylinder, robot):
+    scene = _scene(
+        make_cylinder('T', 1.3, 0.0, 'target'), make_cylinder('O1', 0.5, 0.0), table_x=1.5
+    )
+    planner = MotionPlanner(scene, model=robot)
+    result = planner.check('T', [])
+    assert not result.feasible
+    assert result.blocked_by_immovable and result.blocking_ids == ()
+    assert 'nothing movable' in result.message
+    # Relocating the only obstacle does not help: still immovable.
+    assert planner.check('T', ['O1']).blocked_by_immovable
+
+
+def test_request_errors_carry_no_blockers(behind_one):
+    result = behind_one.check('nope', [])
+    assert result.reason == Reason.UNKNOWN_OBJECT
+    assert result.blocking_ids == () and not result.blocked_by_immovable
