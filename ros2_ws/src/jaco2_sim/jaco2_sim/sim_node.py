@@ -6,7 +6,7 @@ Thin ROS wrapper around :class:`~jaco2_sim.integrator.JointIntegrator` and
 Limits and failure behaviour:
 
 * ``/joint_trajectory``: at most ``max_trajectory_points`` points (default 10 000, range 1 to
-  100 000). The sim runs on one executor thread, so a message blocks /joint_states while it is
+  100 000). Trajectories share the timer's thread, so a message blocks /joint_states while it is
   handled: 10 000 points take about 0.08 s (0.07 s of it rclpy deserialisation), 100 000 about
   0.9 s and 35 MB. The subscription is raw: the point count is read from the CDR bytes first, and
   a longer trajectory is rejected (warning naming the limit) without being deserialised; the arm
@@ -14,12 +14,15 @@ Limits and failure behaviour:
 * ``~/reset_scene`` and the ``scenario`` parameter: a bad scenario gives ``success=false`` /
   ``successful=false`` with the :class:`~jaco2_sim.exceptions.ScenarioError` text (file, field,
   problem); the current scene is kept. Any unexpected exception while loading is answered the
-  same way and logged as an error: the node never dies from a request.
+  same way and logged as an error: the node never dies from a request. Scenario files are at
+  most 1 MB (``qtree_scene.scenario.MAX_SCENARIO_BYTES``), and services and parameters run on a
+  second executor thread: loading never stops /joint_states for more than a few periods.
 """
 
 from __future__ import annotations
 
 import sys
+import threading
 from typing import Any
 
 import numpy as np
@@ -33,7 +36,9 @@ from qtree_scene.message import parse_scene_msg
 from qtree_scene.scenario import load_scenario
 from qtree_scene.scene import Scenario
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.exceptions import InvalidParameterValueException, ParameterUninitializedException
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -106,20 +111,30 @@ class Jaco2SimNode(Node):
         self.fingers = fingers
         self._scene_version = -1
         self._last_scene_time = 0.0
+        # Motion (timer, /joint_trajectory) in its own group; services and parameters run on the
+        # executor's other thread, so loading a scenario never stops /joint_states (#18). The
+        # lock covers what both touch: the integrator and the world.
+        self._motion_group = MutuallyExclusiveCallbackGroup()
+        self._lock = threading.Lock()
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self.state_pub = self.create_publisher(JointState, '/joint_states', STATE_QOS)
         self.scene_pub = self.create_publisher(Scene, '/scene', LATCHED_QOS)
         self.urdf_pub = self.create_publisher(String, '/robot_description', LATCHED_QOS)
         self.create_subscription(
-            JointTrajectory, '/joint_trajectory', self._on_raw_trajectory, TRAJECTORY_QOS, raw=True
+            JointTrajectory,
+            '/joint_trajectory',
+            self._on_raw_trajectory,
+            TRAJECTORY_QOS,
+            raw=True,
+            callback_group=self._motion_group,
         )
         self.create_service(ResetScene, '~/reset_scene', self._on_reset, qos_profile=SERVICE_QOS)
         self.create_service(SetScene, '~/set_scene', self._on_set_scene, qos_profile=SERVICE_QOS)
         self.create_service(
             AttachObject, '~/attach_object', self._on_attach, qos_profile=SERVICE_QOS
         )
-        self.timer = self.create_timer(self.sim.period, self._on_timer)
+        self.timer = self.create_timer(self.sim.period, self._on_timer, self._motion_group)
         self.urdf_pub.publish(String(data=urdf_text()))
         self._publish_scene()
         self.get_logger().info(
@@ -162,7 +177,7 @@ class Jaco2SimNode(Node):
                 self.timer.cancel()
                 self.destroy_timer(self.timer)
                 self.sim.period = 1.0 / p.value
-                self.timer = self.create_timer(self.sim.period, self._on_timer)
+                self.timer = self.create_timer(self.sim.period, self._on_timer, self._motion_group)
 
     def _load(self, name: str) -> None:
         """Load scenario ``name`` and teleport home; on any exception nothing has changed."""
@@ -171,11 +186,16 @@ class Jaco2SimNode(Node):
     def _install(self, scenario: Scenario) -> None:
         """Make ``scenario`` the scene and teleport home; on any exception nothing has changed."""
         world = World(scenario)
-        self.sim.reset(np.asarray(scenario.home))
-        self.scenario, self.world = scenario, world
-        self._publish_scene()
+        with self._lock:
+            self.sim.reset(np.asarray(scenario.home))
+            self.scenario, self.world = scenario, world
+            self._publish_scene()
 
     def _on_timer(self) -> None:
+        with self._lock:
+            self._step()
+
+    def _step(self) -> None:
         if self.sim.step():
             self.get_logger().info('trajectory finished')
         if self.world.attached_id is not None:
@@ -203,7 +223,8 @@ class Jaco2SimNode(Node):
         except TrajectoryError as err:
             self._reject_trajectory(str(err))
             return
-        self._on_trajectory(msg)
+        with self._lock:
+            self._on_trajectory(msg)
 
     def _reject_trajectory(self, why: str) -> None:
         self.get_logger().warning(f'trajectory rejected: {why}')
@@ -260,6 +281,10 @@ class Jaco2SimNode(Node):
         return response
 
     def _on_attach(self, request: AttachObject.Request, response: AttachObject.Response):
+        with self._lock:
+            return self._attach(request, response)
+
+    def _attach(self, request: AttachObject.Request, response: AttachObject.Response):
         try:
             if request.attach:
                 distance = self.world.attach(request.object_id, self.robot.ee_pose(self.sim.q))
@@ -285,7 +310,11 @@ class Jaco2SimNode(Node):
 def main(args: list[str] | None = None) -> None:
     """Run the node until SIGINT/SIGTERM (exit code 0); exit code 2 on bad start-up parameters."""
     startup = (Jaco2SimError, ModelError, ScenarioError, InvalidParameterValueException)
-    sys.exit(run_node(Jaco2SimNode, args=args, startup_errors=startup, name='jaco2_sim'))
+    executor = lambda context: MultiThreadedExecutor(2, context=context)  # noqa: E731 - see _lock
+    code = run_node(
+        Jaco2SimNode, args=args, make_executor=executor, startup_errors=startup, name='jaco2_sim'
+    )
+    sys.exit(code)
 
 
 if __name__ == '__main__':

@@ -80,6 +80,7 @@ EXTRA = {
         'is bounded by time_limit_s [s]',
     ),
 }
+EVENTS_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # docs/QOS.md
 MAX_WAITING_PLANS = 8  # requests waiting for or holding the planner at once [-]
 EXECUTOR_THREADS = MAX_WAITING_PLANS + 4  # + execution, /joint_states, /scene, quick answers
 MAX_MESSAGE_CHARS = 1000  # longest answer message, log line or event message [characters]
@@ -116,7 +117,9 @@ class MotionPlannerNode(Node):
             callback_group=MutuallyExclusiveCallbackGroup(),
         )
         self._execution = TrajectoryExecution(self)  # /joint_trajectory, attach_object
-        self._event_pub = self.create_publisher(PlanningEvent, '/motion_planner/events', 10)
+        self._event_pub = self.create_publisher(
+            PlanningEvent, '/motion_planner/events', EVENTS_QOS
+        )
         self.create_service(
             RelocateObject,
             '/relocate_object',
