@@ -162,6 +162,7 @@ def repeat_tests(
         ``runs``, ``passed`` (runs with every test green), ``failed_tests`` (node id → number
         of runs it failed in), ``run_seconds`` and ``exit_codes`` (one per run).
     """
+    work_dir.mkdir(parents=True, exist_ok=True)
     failures: Counter[str] = Counter()
     passed, seconds, exit_codes = 0, [], []
     for i in range(runs):
