@@ -10,6 +10,9 @@ Modes (exactly one):
               viewer (with --rrd too: save, then open the file in a viewer). --screenshot PNG
               also renders the saved view at the end of the run with a headless Rerun viewer
               (needs a graphics stack, e.g. Mesa lavapipe: WGPU_BACKEND=vulkan).
+  --tree-png  draw the learned Q-tree (last /qtree message) like the paper's Figure 3 to a PNG:
+              levels as rows, Q on the edges, extracted sequence highlighted, --top-k nodes
+              per level (default 4) with a note of what was left out.
   --publish   republish the recorded topics on a live ROS 2 graph with their original timing
               (like `ros2 bag play`): CDR bytes unchanged, QoS from the recorded
               offered_qos_profiles (transient local where recorded so). --rate scales the speed,
@@ -23,6 +26,7 @@ its last complete chunk, with a warning. Channels with unknown schemas are skipp
 Examples:
   python scripts/replay.py run.mcap --summary
   python scripts/replay.py run.mcap --rerun --rrd run.rrd && rerun run.rrd
+  python scripts/replay.py --tree-png tree.png run.mcap
   python scripts/replay.py run.mcap --publish --rate 2 --topics /joint_states /scene
 """
 
@@ -59,6 +63,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     mode.add_argument('--summary', action='store_true', help='print what the log contains')
     mode.add_argument('--rerun', action='store_true', help='convert to a Rerun recording')
     mode.add_argument('--publish', action='store_true', help='republish on a live ROS graph')
+    mode.add_argument('--tree-png', type=Path, metavar='PNG', help='draw the learned Q-tree')
+    parser.add_argument('--top-k', type=int, default=4, help='--tree-png: nodes per level')
     rerun = parser.add_argument_group('--rerun options')
     rerun.add_argument('--rrd', type=Path, help='output .rrd (default: LOG with suffix .rrd)')
     rerun.add_argument('--spawn', action='store_true', help='show the run in a Rerun viewer')
@@ -80,6 +86,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     args = parser.parse_args(argv)
     if args.rate <= 0:
         parser.error('--rate must be positive')
+    if args.top_k < 1:
+        parser.error('--top-k must be >= 1')
     return args
 
 
@@ -327,6 +335,10 @@ def main(argv: list[str] | None = None) -> int:
                         '--screenshot needs a saved recording (drop --spawn or add --rrd)'
                     )
                 screenshot(rrd, args.screenshot)
+        elif args.tree_png is not None:
+            from qtree_recorder.qtree_figure import tree_png_from_run
+
+            print(f'wrote {tree_png_from_run(run, args.tree_png, top_k=args.top_k)}')
         else:
             publish(run, rate=args.rate, topics=args.topics, wait_s=args.wait_subscribers)
     except ReplayError as err:

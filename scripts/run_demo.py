@@ -62,6 +62,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         '--no-execute', action='store_true', help='train only; do not move the simulated arm'
     )
     parser.add_argument(
+        '--execution-mode',
+        default='closed_loop',
+        choices=('closed_loop', 'open_loop'),
+        help='closed_loop: STPIK in the loop at 100 Hz (the paper, default); open_loop: whole '
+        'trajectories',
+    )
+    parser.add_argument(
         '--headless', action='store_true', help='no Rerun viewer: write the .rrd file only'
     )
     parser.add_argument(
@@ -108,6 +115,7 @@ def start_graph(args: argparse.Namespace, files: RunFiles) -> list[NodeProcess]:
         'seed': args.seed,
         'max_episodes': args.max_episodes,
         'execute': not args.no_execute,
+        'execution_mode': args.execution_mode,
     }
     rerun_mode = 'save' if args.headless else 'spawn'
     specs: list[tuple[str, str, dict[str, Any]]] = [
@@ -124,7 +132,11 @@ def start_graph(args: argparse.Namespace, files: RunFiles) -> list[NodeProcess]:
             },
         ),
         ('jaco2_sim', 'sim_node', {'scenario': args.scenario}),
-        ('stpik_motion_planner', 'motion_planner_node', {'seed': args.seed}),
+        (
+            'stpik_motion_planner',
+            'motion_planner_node',
+            {'seed': args.seed, 'execution_mode': args.execution_mode},
+        ),
         ('qtree_task_planner', 'task_planner_node', {}),
     ]
     nodes: list[NodeProcess] = []
@@ -237,14 +249,23 @@ def report(result: Any) -> None:
     print(f'sequence:  {sequence}')
     print(
         f'episodes:  {result.episodes}   MP calls: {result.mp_calls}   planner runs: '
-        f'{result.planner_runs}   first optimal episode: {result.first_optimal_episode}   '
+        f'{result.planner_runs}   first episode reaching the learned level: '
+        f'{result.first_learned_level_episode}   extraction: {result.extraction}   '
         f'converged: {result.converged}   executed: {result.executed}'
     )
 
 
 def print_files(files: RunFiles) -> None:
-    """Say where the MCAP log, the Rerun recording and the node logs are."""
+    """Say where the MCAP log, the Q-tree picture, the Rerun recording and the node logs are."""
     print(f'MCAP log:  {files.mcap}{"" if files.mcap.exists() else "  (missing!)"}')
+    if files.mcap.exists():
+        from qtree_recorder.mcap_reader import ReplayError
+        from qtree_recorder.qtree_figure import tree_png_beside
+
+        try:
+            print(f'Q-tree:    {tree_png_beside(files.mcap)}')
+        except ReplayError as err:
+            print(f'Q-tree:    not drawn ({err})')
     print(f'Rerun:     {files.rrd}{"" if files.rrd.exists() else "  (not written)"}')
     print(f'node logs: {files.logs}')
     print(f'open with: rerun {files.mcap.name}   or   python scripts/replay.py --summary ...')
@@ -260,7 +281,7 @@ def main(argv: list[str] | None = None) -> int:
     nodes: list[NodeProcess] = []
     code = 0
     try:
-        print(f'starting the node graph (logs in {files.logs})')
+        print(f'starting the node graph (logs in {files.logs}); execution: {args.execution_mode}')
         nodes = start_graph(args, files)
         print('nodes ready: ' + ', '.join(node.name for node in nodes))
         result = retrieve_target(args, nodes)

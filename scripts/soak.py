@@ -28,6 +28,7 @@ from soaking import (
     cpu_hog,
     default_work_dir,
     repeat_tests,
+    repeat_tests_parallel,
     stop_rounds,
 )
 from tqdm import tqdm
@@ -40,12 +41,17 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--runs', type=int, default=10, help='runs of the node tests (>= 0)')
     parser.add_argument('--tests', nargs='+', default=list(NODE_TESTS), help='test paths')
     parser.add_argument(
+        '--parallel', type=int, default=1, help='concurrent sequences sharing the runs (>= 1)'
+    )
+    parser.add_argument(
         '--stops', type=int, default=50, help='stops per node, SIGINT and SIGTERM alternating'
     )
     parser.add_argument('--hog-runs', type=int, default=0, help='whole-suite runs under a hog')
     parser.add_argument('--hog-processes', type=int, default=2, help='busy loops (2 = 2 cores)')
     parser.add_argument('--output', type=Path, default=DEFAULT_OUTPUT, help='JSON result file')
     args = parser.parse_args(argv)
+    if args.parallel < 1:
+        parser.error('--parallel must be >= 1')
     for name in ('runs', 'stops', 'hog_runs', 'hog_processes'):
         if getattr(args, name) < 0:
             parser.error(f'--{name.replace("_", "-")} must be >= 0')
@@ -80,7 +86,11 @@ def main(argv: list[str] | None = None) -> int:
         'commit': _commit(),
     }
     with tqdm(total=args.runs, desc='node-test runs', unit='run') as bar:
-        result.update(repeat_tests(args.tests, args.runs, work / 'tests', _progress(bar)))
+        result.update(
+            repeat_tests_parallel(
+                args.tests, args.runs, work / 'tests', args.parallel, _progress(bar)
+            )
+        )
     rounds = (args.stops + 1) // 2  # one SIGINT and one SIGTERM stop per round
     with tqdm(total=2 * rounds, desc='stops of the 4 nodes', unit='stop') as bar:
         codes = stop_rounds(rounds, work / 'stops', progress=bar.update)

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from orchestration import NodeProcess, allocate_domain_id, start_node
+from orchestration import NodeProcess, allocate_domain_id, start_node, stop_all
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
@@ -109,3 +109,230 @@ def ros_node(ros_domain: int) -> Iterator[Any]:
     executor.shutdown()
     node.destroy_node()
     rclpy.try_shutdown(context=context)
+
+
+class ClientGraph:
+    """Nodes started as processes in a private domain for a whole test module, one rclpy client
+    node holding what users' robot software would hold, and what it received.
+
+    Serves the modules that send many requests to one long-lived graph (bad inputs, limits): the
+    module sets ``GRAPH_NODES = {executable: (package, ROS node name, parameters)}`` and asks for
+    the ``client_graph`` fixture. The sim's scenario is s1 in every such graph.
+
+    Attributes:
+        nodes: running node processes by executable name.
+        states: /joint_states messages received; ``q`` the last arm configuration [rad] (7,) and
+            ``state_times`` their stamps [s] (sim clock).
+        scene: last /scene message (None before the first); ``scene_name`` its scenario name.
+    """
+
+    FEASIBLE = 'O2'  # feasible on s1 with nothing relocated (the planner's unit tests)
+
+    def __init__(
+        self, domain_id: int, logs: Path, specs: dict[str, tuple[str, str, dict]]
+    ) -> None:
+        import rclpy
+        from qtree_msgs.action import RetrieveTarget
+        from qtree_msgs.msg import Scene
+        from qtree_msgs.srv import RelocateObject, ResetScene, SetScene
+        from rclpy.action import ActionClient
+        from rclpy.context import Context
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from sensor_msgs.msg import JointState
+        from trajectory_msgs.msg import JointTrajectory
+
+        self.env = dict(
+            os.environ, ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST'
+        )
+        self.specs, self.logs = specs, logs
+        self.restarts = 0
+        self.crashes: list[str] = []
+        self.nodes: dict[str, NodeProcess] = {exe: self._start(exe, logs) for exe in specs}
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = rclpy.create_node('client_graph', context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.states = 0
+        self.q: Any = None
+        self.state_times: list[float] = []
+        self.scene: Any = None
+        latched = QoSProfile(
+            depth=1,
+            reliability=ReliabilityPolicy.RELIABLE,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL,
+        )
+        self.node.create_subscription(JointState, '/joint_states', self._on_state, 1000)
+        self.node.create_subscription(Scene, '/scene', self._on_scene, latched)
+        self.trajectory_pub = self.node.create_publisher(JointTrajectory, '/joint_trajectory', 10)
+        self.relocate_client = self.node.create_client(RelocateObject, '/relocate_object')
+        self.reset_client = self.node.create_client(ResetScene, '/jaco2_sim/reset_scene')
+        self.set_scene_client = self.node.create_client(SetScene, '/jaco2_sim/set_scene')
+        self.action = ActionClient(self.node, RetrieveTarget, '/retrieve_target')
+
+    @property
+    def scene_name(self) -> str:
+        """Scenario name of the last /scene ('' before the first)."""
+        return self.scene.scenario_name if self.scene is not None else ''
+
+    def _on_state(self, msg: Any) -> None:
+        import numpy as np
+
+        self.states += 1
+        self.q = np.array(msg.position[:7])
+        self.state_times.append(msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec)
+
+    def _on_scene(self, msg: Any) -> None:
+        self.scene = msg
+
+    def _start(self, executable: str, log_dir: Path) -> NodeProcess:
+        package, _, parameters = self.specs[executable]
+        return start_node(
+            package, executable, parameters=parameters, env=self.env, log_dir=log_dir
+        )
+
+    def wait_ready(self) -> None:
+        """Every node ready, the planner built on s1, the sim publishing and subscribed."""
+        for process in self.nodes.values():
+            process.wait_for_log('ready', 90.0)
+        if 'motion_planner_node' in self.nodes:
+            self.nodes['motion_planner_node'].wait_for_log('planner rebuilt', 30.0)
+        if 'sim_node' in self.nodes:
+            assert self.spin_until(lambda: self.q is not None and self.scene_name == 's1', 20.0)
+            assert self.spin_until(lambda: self.trajectory_pub.get_subscription_count() > 0, 10.0)
+
+    def revive(self) -> None:
+        """Restart every node that died (a crash fails its own case, not the following ones)."""
+        dead = [exe for exe, process in self.nodes.items() if not process.alive()]
+        for executable in dead:
+            self.crashes.append(f'{executable}: {self.nodes[executable].log_text()[-1500:]}')
+            self.nodes[executable].stop()
+            self.restarts += 1
+            self.nodes[executable] = self._start(executable, self.logs / f'restart{self.restarts}')
+        for executable in dead:
+            self.nodes[executable].wait_for_log('ready', 90.0)
+        if 'motion_planner_node' in dead:
+            self.nodes['motion_planner_node'].wait_for_log('planner rebuilt', 30.0)
+
+    def spin_until(self, predicate: Callable[[], bool], timeout_s: float) -> bool:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if predicate():
+                return True
+            self.executor.spin_once(timeout_sec=0.02)
+        return predicate()
+
+    def wait(self, future: Any, timeout_s: float = 30.0, executable: str = '') -> Any:
+        """Spin until ``future`` is done; fail at once if the answering node dies."""
+        process = self.nodes.get(executable)
+        self.spin_until(lambda: future.done() or (process and not process.alive()), timeout_s)
+        if process is not None and not process.alive() and not future.done():
+            pytest.fail(f'{executable} died before answering:\n{process.log_text()[-3000:]}')
+        assert future.done(), f'no answer in {timeout_s} s'
+        return future.result()
+
+    def call(
+        self, client: Any, request: Any, timeout_s: float = 30.0, executable: str = ''
+    ) -> Any:
+        """Wait for the service, call it; the response (see :meth:`wait`)."""
+        assert client.wait_for_service(timeout_sec=20.0), f'{client.srv_name} not available'
+        return self.wait(client.call_async(request), timeout_s, executable)
+
+    def timed_call(self, client: Any, request: Any, timeout_s: float) -> tuple[Any, float]:
+        """(response, seconds from sending to the answer) of one service call."""
+        assert client.wait_for_service(timeout_sec=20.0), f'{client.srv_name} not available'
+        start = time.monotonic()
+        response = self.wait(client.call_async(request), timeout_s)
+        return response, time.monotonic() - start
+
+    def relocate(self, object_id: str, relocated: list[str], execute: bool = False) -> Any:
+        from qtree_msgs.srv import RelocateObject
+
+        request = RelocateObject.Request(
+            object_id=object_id, relocated_ids=relocated, execute=execute
+        )
+        return self.call(self.relocate_client, request, 60.0, 'motion_planner_node')
+
+    def reset(self, scenario: str) -> Any:
+        from qtree_msgs.srv import ResetScene
+
+        request = ResetScene.Request(scenario=scenario)
+        return self.call(self.reset_client, request, 30.0, 'sim_node')
+
+    def goal(self, timeout_s: float = 60.0, **fields: Any) -> tuple[int, Any]:
+        """Send a RetrieveTarget goal; return (status, result)."""
+        from qtree_msgs.action import RetrieveTarget
+
+        assert self.action.wait_for_server(timeout_sec=20.0)
+        handle = self.wait(self.action.send_goal_async(RetrieveTarget.Goal(**fields)))
+        assert handle.accepted, 'the task planner rejects no goal: it aborts with a reason'
+        response = self.wait(handle.get_result_async(), timeout_s, 'task_planner_node')
+        return response.status, response.result
+
+    def log_mark(self, executable: str) -> int:
+        return len(self.nodes[executable].log_text())
+
+    def wait_log(self, executable: str, mark: int, fragment: str, timeout_s: float = 5.0) -> str:
+        """Spin until ``fragment`` is in the node's output after ``mark``; return that output."""
+        process = self.nodes[executable]
+        self.spin_until(lambda: fragment in process.log_text()[mark:], timeout_s)
+        text = process.log_text()[mark:]
+        assert fragment in text, f'{fragment!r} not logged; new output:\n{text[-2000:]}'
+        return text
+
+    def assert_alive(self, executable: str) -> None:
+        """The node still runs and answers a valid request."""
+        process = self.nodes[executable]
+        assert process.alive(), f'{executable} died:\n{process.log_text()[-3000:]}'
+        if executable == 'motion_planner_node':
+            response = self.relocate(self.FEASIBLE, [])
+            assert response.feasible and response.reason == 0, response.message
+        elif executable == 'sim_node':
+            count = self.states
+            assert self.spin_until(lambda: self.states >= count + 10, 5.0), 'no /joint_states'
+            assert self.reset('s1').success
+        elif executable == 'task_planner_node':
+            from qtree_msgs.action import RetrieveTarget
+
+            _, result = self.goal(max_episodes=3, seed=1)
+            codes = {RetrieveTarget.Result.SUCCESS, RetrieveTarget.Result.NO_SOLUTION}
+            assert result.error_code in codes and 1 <= result.episodes <= 3, result.message
+
+    def close(self) -> dict[str, int]:
+        """Destroy the client node and stop every node; exit codes of those still alive."""
+        import rclpy
+
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.context)
+        alive = [process for process in self.nodes.values() if process.alive()]
+        dead = [process for process in self.nodes.values() if not process.alive()]
+        codes = stop_all(alive)
+        stop_all(dead)  # killed by the last case: already reported by it
+        return codes
+
+
+@pytest.fixture(scope='module')
+def client_graph(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[ClientGraph]:
+    """The module's ``GRAPH_NODES`` running on a private domain, ready, with a client node.
+
+    Teardown asserts that every node alive at the end exits cleanly (exit code 0).
+    """
+    logs = tmp_path_factory.mktemp(f'{request.module.__name__}_logs')
+    graph = ClientGraph(allocate_domain_id(), logs, request.module.GRAPH_NODES)
+    try:
+        graph.wait_ready()
+        yield graph
+    finally:
+        codes = graph.close()
+    assert all(code == 0 for code in codes.values()), codes
+
+
+@pytest.fixture
+def g(client_graph: ClientGraph) -> ClientGraph:
+    """The module's client graph with every node alive (restarted if an earlier case killed it)."""
+    client_graph.revive()
+    return client_graph

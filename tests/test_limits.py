@@ -1,26 +1,28 @@
 """Limits: huge requests, a 200-object scene and a 100 000-point trajectory, in time and memory.
 
-One sim + motion planner graph for the module. Each case measures the answer time and the
-resident memory (VmRSS from ``/proc/<pid>/status``, summed over the node's process tree) of the
-node before and after, and prints the figures (``-s``) for docs/RELIABILITY.md. No node documents
-a size limit on these inputs, so the assertions are the bounds a user may expect: an answer in
-seconds, RSS growth below 150 MB, the sim publishing /joint_states without a long gap, and
-answers (messages, logs) that stay short when the request is huge.
+One sim + motion planner graph for the module (``GRAPH_NODES``; the ``g`` fixture of
+conftest.py). Each case measures the answer time and the resident memory (VmRSS from
+``/proc/<pid>/status``, summed over the node's process tree) of the node before and after, and
+prints the figures (``-s``) for docs/RELIABILITY.md. No node documents a size limit on these
+inputs, so the assertions are the bounds a user may expect: an answer in seconds, RSS growth
+below 150 MB, the sim publishing /joint_states without a long gap, and answers (messages, logs)
+that stay short when the request is huge.
 """
 
 from __future__ import annotations
 
 import math
-import os
 import time
-from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
 from load_test import rss_mb  # one RSS reader for the load script and these tests
-from orchestration import NodeProcess, allocate_domain_id, start_node, stop_all
+from orchestration import NodeProcess
+
+if TYPE_CHECKING:
+    from conftest import ClientGraph
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -29,87 +31,11 @@ MESSAGE_CHARS = 2000  # longest acceptable answer message [characters]
 MAX_STATE_GAP_S = 0.5  # longest acceptable /joint_states silence of the sim (25 periods) [s]
 
 
-class Limits:
-    """Sim (s1) and motion planner on a private domain, and a client node."""
-
-    def __init__(self, domain_id: int, logs: Path) -> None:
-        import rclpy
-        from qtree_msgs.msg import Scene
-        from qtree_msgs.srv import RelocateObject, ResetScene
-        from rclpy.context import Context
-        from rclpy.executors import SingleThreadedExecutor
-        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-        from sensor_msgs.msg import JointState
-        from trajectory_msgs.msg import JointTrajectory
-
-        env = dict(
-            os.environ, ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST'
-        )
-        self.sim = start_node(
-            'jaco2_sim', 'sim_node', parameters={'sim_rate_hz': 50.0}, env=env, log_dir=logs
-        )
-        self.mp = start_node('stpik_motion_planner', 'motion_planner_node', env=env, log_dir=logs)
-        self.context = Context()
-        rclpy.init(context=self.context, domain_id=domain_id)
-        self.node = rclpy.create_node('limits_client', context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-        self.state_times: list[float] = []  # /joint_states stamps (sim clock) [s]
-        self.scene: Any = None
-        latched = QoSProfile(
-            depth=1,
-            reliability=ReliabilityPolicy.RELIABLE,
-            durability=DurabilityPolicy.TRANSIENT_LOCAL,
-        )
-        self.node.create_subscription(JointState, '/joint_states', self._on_state, 1000)
-        self.node.create_subscription(Scene, '/scene', self._on_scene, latched)
-        self.trajectory_pub = self.node.create_publisher(JointTrajectory, '/joint_trajectory', 10)
-        self.relocate = self.node.create_client(RelocateObject, '/relocate_object')
-        self.reset = self.node.create_client(ResetScene, '/jaco2_sim/reset_scene')
-
-    def _on_state(self, msg: Any) -> None:
-        self.state_times.append(msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec)
-
-    def _on_scene(self, msg: Any) -> None:
-        self.scene = msg
-
-    def spin_until(self, predicate: Any, timeout_s: float) -> bool:
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            if predicate():
-                return True
-            self.executor.spin_once(timeout_sec=0.02)
-        return predicate()
-
-    def call(self, client: Any, request: Any, timeout_s: float) -> tuple[Any, float]:
-        """(response, seconds) of one service call."""
-        assert client.wait_for_service(timeout_sec=20.0)
-        start = time.monotonic()
-        future = client.call_async(request)
-        assert self.spin_until(future.done, timeout_s), f'no answer in {timeout_s} s'
-        return future.result(), time.monotonic() - start
-
-    def close(self) -> dict[str, int]:
-        import rclpy
-
-        self.executor.shutdown()
-        self.node.destroy_node()
-        rclpy.try_shutdown(context=self.context)
-        return stop_all([self.sim, self.mp])
-
-
-@pytest.fixture(scope='module')
-def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Limits]:
-    graph = Limits(allocate_domain_id(), tmp_path_factory.mktemp('limits_logs'))
-    try:
-        graph.sim.wait_for_log('ready', 90.0)
-        graph.mp.wait_for_log('ready', 90.0)
-        graph.mp.wait_for_log('planner rebuilt', 30.0)
-        assert graph.spin_until(lambda: graph.scene is not None and graph.state_times, 20.0)
-        yield graph
-    finally:
-        codes = graph.close()
-    assert all(code == 0 for code in codes.values()), codes
+GRAPH_NODES = {  # executable -> (package, ROS node name, start-up parameters); conftest.py
+    'sim_node': ('jaco2_sim', 'jaco2_sim', {'sim_rate_hz': 50.0}),
+    'motion_planner_node': ('stpik_motion_planner', 'motion_planner', {}),
+}
+SIM, PLANNER = 'sim_node', 'motion_planner_node'
 
 
 def _report(label: str, node: NodeProcess, before_mb: float, seconds: float) -> float:
@@ -130,19 +56,19 @@ def _report(label: str, node: NodeProcess, before_mb: float, seconds: float) -> 
     ],
     ids=['unknown', 'duplicates', 'empty'],
 )
-def test_huge_relocated_list(graph: Limits, label, object_id, relocated, code) -> None:
+def test_huge_relocated_list(g: ClientGraph, label, object_id, relocated, code) -> None:
     from qtree_msgs.srv import RelocateObject
 
-    before = rss_mb(graph.mp.process.pid)
-    mark = len(graph.mp.log_text())
+    before = rss_mb(g.nodes[PLANNER].process.pid)
+    mark = len(g.nodes[PLANNER].log_text())
     request = RelocateObject.Request(object_id=object_id, relocated_ids=relocated)
-    response, seconds = graph.call(graph.relocate, request, 30.0)
-    growth = _report(f'RelocateObject with {label}', graph.mp, before, seconds)
-    logged = graph.mp.log_text()[mark:]
+    response, seconds = g.timed_call(g.relocate_client, request, 30.0)
+    growth = _report(f'RelocateObject with {label}', g.nodes[PLANNER], before, seconds)
+    logged = g.nodes[PLANNER].log_text()[mark:]
     print(f'[limits]   message {len(response.message)} chars, log {len(logged)} chars')
     assert response.reason == code, response.message[:300]
     assert seconds < 5.0 and growth < RSS_GROWTH_MB
-    ok, _ = graph.call(graph.relocate, RelocateObject.Request(object_id='O2'), 30.0)
+    ok, _ = g.timed_call(g.relocate_client, RelocateObject.Request(object_id='O2'), 30.0)
     assert ok.feasible, ok.message
     assert len(response.message) <= MESSAGE_CHARS, (
         f'the answer echoes the request: {len(response.message)} chars'
@@ -150,22 +76,25 @@ def test_huge_relocated_list(graph: Limits, label, object_id, relocated, code) -
     assert len(logged) <= 10 * MESSAGE_CHARS, f'one request logged {len(logged)} chars'
 
 
-def test_scene_with_200_objects(graph: Limits, tmp_path: Path) -> None:
+def test_scene_with_200_objects(g: ClientGraph, tmp_path: Path) -> None:
     from qtree_msgs.srv import RelocateObject, ResetScene
     from qtree_scene.generator import generate_clutter
     from qtree_scene.scenario import dump_scenario
 
     path = tmp_path / 'clutter200.yaml'
     path.write_text(dump_scenario(generate_clutter(200, 0.3, seed=0)))
-    sim_before, mp_before = rss_mb(graph.sim.process.pid), rss_mb(graph.mp.process.pid)
-    mark = len(graph.mp.log_text())
-    response, seconds = graph.call(graph.reset, ResetScene.Request(scenario=str(path)), 30.0)
+    sim_before, mp_before = (
+        rss_mb(g.nodes[SIM].process.pid),
+        rss_mb(g.nodes[PLANNER].process.pid),
+    )
+    mark = len(g.nodes[PLANNER].log_text())
+    response, seconds = g.timed_call(g.reset_client, ResetScene.Request(scenario=str(path)), 30.0)
     assert response.success, response.message
-    assert graph.spin_until(lambda: len(graph.scene.objects) == 202, 10.0)
+    assert g.spin_until(lambda: len(g.scene.objects) == 202, 10.0)
     start = time.monotonic()
-    assert graph.spin_until(lambda: 'planner rebuilt' in graph.mp.log_text()[mark:], 30.0)
+    assert g.spin_until(lambda: 'planner rebuilt' in g.nodes[PLANNER].log_text()[mark:], 30.0)
     rebuilt_s = time.monotonic() - start + seconds
-    _report('reset_scene to 200 objects', graph.sim, sim_before, seconds)
+    _report('reset_scene to 200 objects', g.nodes[SIM], sim_before, seconds)
     times = {}
     for object_id, relocated in [
         ('O1', []),
@@ -174,23 +103,23 @@ def test_scene_with_200_objects(graph: Limits, tmp_path: Path) -> None:
         ('T', [f'O{i}' for i in range(1, 201)]),
     ]:
         request = RelocateObject.Request(object_id=object_id, relocated_ids=relocated)
-        answer, times[object_id, len(relocated)] = graph.call(graph.relocate, request, 60.0)
+        answer, times[object_id, len(relocated)] = g.timed_call(g.relocate_client, request, 60.0)
         assert answer.reason in {0, 201, 202, 203, 204, 205, 301}, answer.message
     growth = _report(
         f'200 objects: planner rebuilt in {rebuilt_s:.2f} s, 4 checks',
-        graph.mp,
+        g.nodes[PLANNER],
         mp_before,
         sum(times.values()),
     )
     print(f'[limits]   check times [s]: { {k: round(v, 3) for k, v in times.items()} }')
     assert max(times.values()) < 2.0 + 5.0  # time_limit_s + transport
     assert growth < RSS_GROWTH_MB
-    assert graph.call(graph.reset, ResetScene.Request(scenario='s1'), 30.0)[0].success
-    assert graph.spin_until(lambda: len(graph.scene.objects) == 7, 10.0)
+    assert g.timed_call(g.reset_client, ResetScene.Request(scenario='s1'), 30.0)[0].success
+    assert g.spin_until(lambda: len(g.scene.objects) == 7, 10.0)
 
 
 @pytest.mark.parametrize('n', [10_000, 100_000])
-def test_long_trajectory(graph: Limits, n: int) -> None:
+def test_long_trajectory(g: ClientGraph, n: int) -> None:
     from builtin_interfaces.msg import Duration
     from jaco2_description.model import ARM_JOINTS, HOME
     from qtree_msgs.srv import ResetScene
@@ -207,28 +136,28 @@ def test_long_trajectory(graph: Limits, n: int) -> None:
                 time_from_start=Duration(sec=int(t), nanosec=round((t % 1) * 1e9) % 10**9),
             )
         )
-    before = rss_mb(graph.sim.process.pid)
-    mark = len(graph.sim.log_text())
-    count = len(graph.state_times)
-    assert graph.spin_until(lambda: graph.trajectory_pub.get_subscription_count() > 0, 20.0)
+    before = rss_mb(g.nodes[SIM].process.pid)
+    mark = len(g.nodes[SIM].log_text())
+    count = len(g.state_times)
+    assert g.spin_until(lambda: g.trajectory_pub.get_subscription_count() > 0, 20.0)
     start = time.monotonic()
-    graph.trajectory_pub.publish(msg)
+    g.trajectory_pub.publish(msg)
     # documented limit: sim_node's max_trajectory_points (default 10 000); longer is rejected
     expected = (
         f'following a trajectory of {n} points'
         if n <= 10_000
         else 'more than max_trajectory_points = 10000'
     )
-    accepted = graph.spin_until(lambda: expected in graph.sim.log_text()[mark:], 60.0)
+    accepted = g.spin_until(lambda: expected in g.nodes[SIM].log_text()[mark:], 60.0)
     seconds = time.monotonic() - start
-    graph.spin_until(lambda: False, 1.0)
-    growth = _report(f'trajectory of {n} points', graph.sim, before, seconds)
-    gaps = np.diff(graph.state_times[max(count - 1, 0) :])
+    g.spin_until(lambda: False, 1.0)
+    growth = _report(f'trajectory of {n} points', g.nodes[SIM], before, seconds)
+    gaps = np.diff(g.state_times[max(count - 1, 0) :])
     largest_gap = float(gaps.max()) if len(gaps) else math.inf
     print(f'[limits]   largest /joint_states gap {largest_gap:.2f} s')
-    assert accepted, graph.sim.log_text()[mark:][-2000:]
-    assert graph.sim.alive()
+    assert accepted, g.nodes[SIM].log_text()[mark:][-2000:]
+    assert g.nodes[SIM].alive()
     assert growth < RSS_GROWTH_MB
-    graph.trajectory_pub.publish(JointTrajectory(joint_names=list(ARM_JOINTS)))  # stop
-    assert graph.call(graph.reset, ResetScene.Request(scenario='s1'), 30.0)[0].success
+    g.trajectory_pub.publish(JointTrajectory(joint_names=list(ARM_JOINTS)))  # stop
+    assert g.timed_call(g.reset_client, ResetScene.Request(scenario='s1'), 30.0)[0].success
     assert largest_gap < MAX_STATE_GAP_S, f'/joint_states stopped for {largest_gap:.2f} s'

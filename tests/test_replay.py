@@ -50,7 +50,7 @@ def test_help_documents_every_option() -> None:
     result = replay('--help')
     assert result.returncode == 0
     for option in ('--summary', '--rerun', '--rrd', '--spawn', '--publish', '--rate', '--topics',
-                   '--screenshot', 'truncated'):  # fmt: skip
+                   '--screenshot', '--tree-png', '--top-k', 'truncated'):  # fmt: skip
         assert option in result.stdout
 
 
@@ -82,11 +82,29 @@ def test_rerun_conversion_writes_the_live_view(log: Path, tmp_path: Path) -> Non
     expected = {
         '/j2s7s300/visual_geometries/j2s7s300_link_7/visual_0', '/tf/j2s7s300_joint_4',
         '/scene/objects/T', '/scene/objects/O2', '/scene/objects/table', '/scene/drop_zone',
-        '/plans/O1', '/events', '/qtree', '/stats/q_bar', '/stats/mp_calls', '/stats/epsilon',
+        '/plans/O1', '/events', '/qtree/nodes', '/qtree/edges', '/stats/q_bar',
+        '/stats/mp_calls', '/stats/epsilon',
     }  # fmt: skip
     assert expected <= entities, expected - entities
     assert len(FX.rrd_column(rrd, '/tf/j2s7s300_joint_4', 'Transform3D:translation')) == 20
     assert len(FX.rrd_column(rrd, '/stats/epsilon', 'Scalars:scalars')) == 4
+
+
+def test_tree_png_draws_the_last_recorded_tree(log: Path, tmp_path: Path) -> None:
+    png = tmp_path / 'tree.png'
+    result = replay('--tree-png', str(png), str(log))
+    assert result.returncode == 0, result.stderr
+    assert png.stat().st_size > 5000 and f'wrote {png}' in result.stdout
+    from qtree_recorder.mcap_reader import open_run
+    from qtree_recorder.qtree_figure import KIND_INFEASIBLE, KIND_TARGET, layout_tree
+
+    last = list(open_run(log).messages(['/qtree']))[-1].message
+    edges = [(e.parent, e.child, e.object_id, e.q, e.on_best_path, e.reward) for e in last.edges]
+    drawing = layout_tree(list(last.node_sequences), edges)
+    assert drawing.path == [0, 2, 3]
+    assert [e.kind for e in drawing.edges] == [KIND_INFEASIBLE, 'feasible', KIND_TARGET]
+    bad = replay('--tree-png', str(png), str(log), '--top-k', '0')
+    assert bad.returncode == 2 and '--top-k' in bad.stderr
 
 
 def test_truncated_log_replays_with_a_warning(tmp_path: Path) -> None:

@@ -98,7 +98,9 @@ def test_heg_learns_the_exact_optimum_on_s1(launch, ros_node) -> None:
     assert len(result.sequence) == exact.level
     assert result.sequence[-1] == exact.sequence[-1]  # the target
     assert result.converged and 0 < result.episodes <= 5000
-    assert 1 <= result.first_optimal_episode <= result.episodes
+    assert result.first_optimal_episode == -1  # the node does not know the optimal level
+    assert 1 <= result.first_learned_level_episode <= result.episodes
+    assert result.extraction == 'eq19'
     assert 0 < result.planner_runs <= result.mp_calls
     ros_node.spin_until(lambda: len(runner.stats) >= result.episodes, 10.0)
     assert len(runner.stats) == result.episodes  # one /training_stats per episode

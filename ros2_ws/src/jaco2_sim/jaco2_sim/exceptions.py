@@ -10,7 +10,14 @@ from __future__ import annotations
 from jaco2_description.exceptions import ModelError
 from qtree_scene.exceptions import ScenarioError
 
-__all__ = ['Jaco2SimError', 'ModelError', 'ScenarioError', 'TrajectoryError', 'WorldError']
+__all__ = [
+    'DisturbanceError',
+    'Jaco2SimError',
+    'ModelError',
+    'ScenarioError',
+    'TrajectoryError',
+    'WorldError',
+]
 
 
 class Jaco2SimError(Exception):
@@ -23,3 +30,7 @@ class TrajectoryError(Jaco2SimError):
 
 class WorldError(Jaco2SimError):
     """An attach/detach request does not fit the world state (unknown id, already attached)."""
+
+
+class DisturbanceError(Jaco2SimError):
+    """A disturbance parameter is NaN, negative or out of its range."""

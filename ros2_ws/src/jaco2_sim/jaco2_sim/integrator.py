@@ -52,6 +52,8 @@ class JointIntegrator:
         self._points: np.ndarray | None = None  # (N, 7) [rad]
         self._speeds: np.ndarray | None = None  # (N, 7) [rad/s] or None
         self._start = 0.0
+        self.offset = np.zeros(7)  # the servos settle at reference + offset [rad] (disturbance)
+        self.velocity_scale = 1.0  # fraction of the velocity limits reached [-] (disturbance)
         self.reset(0.5 * (limits.lower + limits.upper) if q0 is None else q0)
 
     @property
@@ -85,6 +87,14 @@ class JointIntegrator:
         """Stop following the reference; the arm holds its position."""
         self._times = self._points = self._speeds = None
         self.velocity = np.zeros(7)
+
+    def disturb(self, joint_offset_rad: Sequence[float], velocity_scale: float) -> None:
+        """Set the disturbances: servo offset [rad] (7,) and velocity-limit scale (0, 1] [-].
+
+        Validated by :class:`jaco2_sim.disturbances.Disturbances`.
+        """
+        self.offset = np.asarray(joint_offset_rad, dtype=float).copy()
+        self.velocity_scale = float(velocity_scale)
 
     def set_reference(
         self,
@@ -169,15 +179,17 @@ class JointIntegrator:
             self.velocity = np.zeros(7)
             return False
         elapsed = self.time - self._start
-        target = self.reference_at(elapsed)
+        target = np.clip(
+            self.reference_at(elapsed) + self.offset, self.limits.lower, self.limits.upper
+        )
         v = (target - self._q) / self.period
-        ratio = float(np.max(np.abs(v) / self.limits.velocity))
+        ratio = float(np.max(np.abs(v) / (self.limits.velocity * self.velocity_scale)))
         if ratio > 1.0:
             v /= ratio
         previous = self._q
         self._q = np.clip(previous + v * self.period, self.limits.lower, self.limits.upper)
         self.velocity = (self._q - previous) / self.period
-        end = self._points[-1]
+        end = np.clip(self._points[-1] + self.offset, self.limits.lower, self.limits.upper)
         if elapsed >= self._times[-1] and np.max(np.abs(self._q - end)) <= GOAL_TOLERANCE:
             self.cancel()
             return True

@@ -54,6 +54,7 @@ from jaco2_sim.conversions import (
     scene_msg,
     trajectory_arrays,
 )
+from jaco2_sim.disturbances import PARAMETER_FIELDS, DisturbedDrive, from_parameters
 from jaco2_sim.exceptions import Jaco2SimError, ModelError, ScenarioError, TrajectoryError
 from jaco2_sim.integrator import JointIntegrator
 from jaco2_sim.world import World
@@ -82,6 +83,12 @@ PARAMETERS = [
         10_000,
         ('longer /joint_trajectory messages are rejected unread', 1, MAX_TRAJECTORY_POINTS_CAP),
     ),
+    ('command_topic', '/joint_command', ('streamed sensor_msgs/JointState arm references',)),
+    ('joint_offset_rad', [0.0] * 7, ('disturbance: servo offset per arm joint [rad]',)),
+    ('command_latency_s', 0.0, ('disturbance: command latency [s]', 0.0, 2.0)),
+    ('velocity_limit_scale', 1.0, ('disturbance: fraction of the velocity limits', 0.05, 1.0)),
+    ('measurement_noise_rad', 0.0, ('disturbance: joint-state noise σ [rad]', 0.0, 0.1)),
+    ('noise_seed', 0, ('seed of the measurement noise', 0, 2**31 - 1)),
 ]
 
 
@@ -106,6 +113,7 @@ class Jaco2SimNode(Node):
         self.sim = JointIntegrator(
             self.robot.limits, self._param('sim_rate_hz'), self.scenario.home if q0 is None else q0
         )
+        self.drive = DisturbedDrive(self.sim, from_parameters(self._disturbance_values()))
         fingers = np.zeros(len(FINGER_JOINTS))
         fingers[:3] = self.robot.finger_angle
         self.fingers = fingers
@@ -129,6 +137,13 @@ class Jaco2SimNode(Node):
             raw=True,
             callback_group=self._motion_group,
         )
+        self.create_subscription(  # streamed references (closed-loop execution)
+            JointState,
+            self._param('command_topic'),
+            self._on_command,
+            TRAJECTORY_QOS,
+            callback_group=self._motion_group,
+        )
         self.create_service(ResetScene, '~/reset_scene', self._on_reset, qos_profile=SERVICE_QOS)
         self.create_service(SetScene, '~/set_scene', self._on_set_scene, qos_profile=SERVICE_QOS)
         self.create_service(
@@ -147,10 +162,16 @@ class Jaco2SimNode(Node):
         except ParameterUninitializedException:
             return None
 
+    def _disturbance_values(self, params: list[Parameter] = ()) -> dict:
+        values = {name: self._param(name) for name in PARAMETER_FIELDS}
+        return values | {p.name: p.value for p in params if p.name in PARAMETER_FIELDS}
+
     def _check_parameters(self, params: list[Parameter]) -> SetParametersResult:
         for p in params:
             try:
-                if p.name == 'scenario':
+                if p.name in PARAMETER_FIELDS:
+                    from_parameters(self._disturbance_values(params))
+                elif p.name == 'scenario':
                     load_scenario(p.value)
                 elif p.name == 'initial_configuration' and p.value is not None:
                     JointIntegrator(self.robot.limits, q0=np.asarray(p.value, dtype=float))
@@ -167,6 +188,8 @@ class Jaco2SimNode(Node):
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, params: list[Parameter]) -> None:
+        if any(p.name in PARAMETER_FIELDS for p in params):
+            self.drive.configure(from_parameters(self._disturbance_values()))
         for p in params:
             if p.name == 'scenario':
                 try:
@@ -188,6 +211,7 @@ class Jaco2SimNode(Node):
         world = World(scenario)
         with self._lock:
             self.sim.reset(np.asarray(scenario.home))
+            self.drive.delay.clear()
             self.scenario, self.world = scenario, world
             self._publish_scene()
 
@@ -196,13 +220,15 @@ class Jaco2SimNode(Node):
             self._step()
 
     def _step(self) -> None:
+        for error in self.drive.apply_due():
+            self._reject_trajectory(f'(delayed command) {error}')
         if self.sim.step():
             self.get_logger().info('trajectory finished')
         if self.world.attached_id is not None:
             self.world.update(self.robot.ee_pose(self.sim.q))
         now = self.get_clock().now()
         self.state_pub.publish(
-            joint_state_msg(now.to_msg(), self.sim.q, self.sim.velocity, self.fingers)
+            joint_state_msg(now.to_msg(), self.drive.measured(), self.sim.velocity, self.fingers)
         )
         seconds = now.nanoseconds * 1e-9
         if self.world.version != self._scene_version and (
@@ -231,17 +257,25 @@ class Jaco2SimNode(Node):
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
         if not msg.points:
+            self.drive.delay.clear()
             self.sim.cancel()
             self.get_logger().info('empty trajectory: stopping')
             return
         try:
-            clamped = self.sim.set_reference(*trajectory_arrays(msg))
+            clamped = self.drive.command('trajectory', *trajectory_arrays(msg))
         except (Jaco2SimError, ModelError, ScenarioError) as err:
             self._reject_trajectory(str(err))
             return
         if clamped:
             self.get_logger().warning('trajectory beyond the joint limits: clamped to them')
         self.get_logger().info(f'following a trajectory of {len(msg.points)} points')
+
+    def _on_command(self, msg: JointState) -> None:
+        try:
+            with self._lock:
+                self.drive.command('point', list(msg.name), list(msg.position))
+        except (Jaco2SimError, ValueError) as err:
+            self.get_logger().warning(f'command rejected: {err}', throttle_duration_sec=1.0)
 
     def _on_reset(self, request: ResetScene.Request, response: ResetScene.Response):
         name = request.scenario or self.scenario.source or self.scenario.name
@@ -266,17 +300,17 @@ class Jaco2SimNode(Node):
         try:
             self._install(parse_scene_msg(request.scene))
         except (Jaco2SimError, ModelError, ScenarioError) as err:
-            response.success, response.message = False, str(err)
-            self.get_logger().warning(f'set_scene rejected: {err}')
+            response.success, response.message = False, clip(str(err), 1000)
+            self.get_logger().warning(f'set_scene rejected: {response.message}')
             return response
         except Exception as err:  # a bad message must not kill the node
             response.success = False
-            response.message = f'SetScene: unexpected {type(err).__name__}: {err}'
+            response.message = clip(f'SetScene: unexpected {type(err).__name__}: {err}', 1000)
             self.get_logger().error(f'set_scene failed: {response.message}')
             return response
         response.success = True
         response.message = (
-            f'scene {self.scenario.name!r} set ({len(self.scenario.objects)} objects)'
+            f'scene {quote(self.scenario.name)} set ({len(self.scenario.objects)} objects)'
         )
         return response
 

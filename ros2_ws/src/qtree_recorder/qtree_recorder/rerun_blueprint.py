@@ -2,7 +2,8 @@
 
 Left: the 3D scene (arm from its URDF, table, objects, planned end-effector paths) in the robot
 base frame. Right: the Q-tree graph on top, the episode curves (Q̄; nodes, edges and MP calls;
-ε) as tabs below it, and the planning-event log at the bottom.
+ε) and the closed-loop EE tracking error as tabs below it, and the planning-event log at the
+bottom.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ PLANS_ENTITY = '/plans'
 QTREE_ENTITY = '/qtree'
 STATS_ENTITY = '/stats'
 EVENTS_ENTITY = '/events'
+TRACKING_ENTITY = '/tracking'  # closed-loop execution: EE reference vs actual path, error curve
 TIME_TIMELINE = 'ros_time'  # log time of each message (timestamp)
 EPISODE_TIMELINE = 'episode'  # training episode (sequence)
 LEVEL_SPACING = 80.0  # Q-tree layout: distance between levels [graph units]
@@ -43,6 +45,8 @@ def default_blueprint(*, robot_entity: str = ROBOT_ENTITY) -> rrb.Blueprint:
             f'- {robot_entity}/collision_geometries/**',
             f'+ {SCENE_ENTITY}/**',
             f'+ {PLANS_ENTITY}/**',
+            f'+ {TRACKING_ENTITY}/**',
+            f'- {TRACKING_ENTITY}/error_mm',
         ],
         spatial_information=rrb.archetypes.SpatialInformation(
             target_frame=WORLD_FRAME, show_axes=True
@@ -68,10 +72,13 @@ def default_blueprint(*, robot_entity: str = ROBOT_ENTITY) -> rrb.Blueprint:
             ],
         ),
         rrb.TimeSeriesView(name='ε', origin=f'{STATS_ENTITY}/epsilon'),
+        rrb.TimeSeriesView(name='EE tracking error [mm]', origin=f'{TRACKING_ENTITY}/error_mm'),
         name='episode curves',
     )
     right = rrb.Vertical(
-        rrb.GraphView(name='Q-tree', origin=QTREE_ENTITY),
+        rrb.Spatial2DView(
+            name='Q-tree (top 4 per level by Q, extracted path orange)', origin=QTREE_ENTITY
+        ),
         curves,
         rrb.TextLogView(
             name='planning events',
@@ -88,7 +95,7 @@ def default_blueprint(*, robot_entity: str = ROBOT_ENTITY) -> rrb.Blueprint:
         row_shares=[3, 2, 2],
     )
     return rrb.Blueprint(
-        rrb.Horizontal(scene_view, right, column_shares=[3, 2]),
+        rrb.Horizontal(scene_view, right, column_shares=[1, 1]),
         rrb.TimePanel(timeline=TIME_TIMELINE, expanded=False, play_state='following'),
         collapse_panels=True,
     )

@@ -30,17 +30,30 @@ import rerun as rr
 
 from qtree_recorder import rerun_blueprint as bp
 from qtree_recorder.markers import object_geometry
+from qtree_recorder.qtree_figure import (
+    DEFAULT_TOP_K,
+    KIND_FEASIBLE,
+    KIND_INFEASIBLE,
+    KIND_TARGET,
+    layout_tree,
+)
 
 _LOG = logging.getLogger(__name__)
+EVENTS_STOP = f'{bp.EVENTS_ENTITY}/execution'  # closed-loop stops in the event log
 
 # Colours [RGB 0..255] by role, and for relocated objects.
 ROLE_COLORS = {'target': (40, 180, 70), 'obstacle': (210, 50, 50), 'static': (139, 94, 60)}
 RELOCATED_COLOR = (150, 150, 150)
 GRASPED_COLOR = (250, 200, 40)
 PATH_COLORS = {True: (40, 120, 230), False: (230, 120, 30)}  # feasible / infeasible
-BEST_NODE_COLOR = (40, 180, 70)
 NODE_COLOR = (120, 120, 130)
-ROOT_LABEL = 'root'
+HIGHLIGHT_COLOR = (255, 127, 14)  # the extracted sequence
+EDGE_COLORS = {KIND_FEASIBLE: (150, 150, 160), KIND_INFEASIBLE: (214, 39, 40),
+               KIND_TARGET: (44, 160, 44)}  # fmt: skip
+ROOT_LABEL = 's_H'
+QTREE_TOP_K = DEFAULT_TOP_K  # Q-tree view: nodes kept per level (as the PNG)
+QTREE_X_SPACING = 175.0  # Q-tree view: distance between neighbouring leaves [view units]
+QTREE_Y_SPACING = 110.0  # Q-tree view: distance between levels [view units]
 # qtree_msgs constants (ObjectState.msg, RelocateObject.srv) as names.
 ROLES = {0: 'target', 1: 'obstacle', 2: 'static'}
 STATUSES = {0: 'in_clutter', 1: 'grasped', 2: 'relocated'}
@@ -48,10 +61,12 @@ REASONS = {
     0: 'SUCCESS', 101: 'UNKNOWN_OBJECT', 102: 'ALREADY_RELOCATED', 103: 'INVALID_REQUEST',
     104: 'NO_SCENE', 105: 'INVALID_SCENE', 201: 'NO_CARTESIAN_PATH', 202: 'IK_NOT_CONVERGED',
     203: 'JOINT_LIMIT', 204: 'SELF_COLLISION', 205: 'SCENE_COLLISION', 301: 'TIMEOUT',
-    302: 'EXECUTION_FAILED',
+    302: 'EXECUTION_FAILED', 303: 'PLANNER_BUSY',
 }  # fmt: skip
 TOPICS = ('/robot_description', '/joint_states', '/scene', '/motion_planner/events', '/qtree',
-          '/training_stats')  # fmt: skip
+          '/training_stats', '/motion_planner/tracking')  # fmt: skip
+TRACK_COLORS = {'reference': (120, 120, 130), 'actual': (40, 180, 70)}
+TRACK_EVERY = 50  # log the reference / actual EE paths in pieces of this many ticks [-]
 
 F = TypeVar('F', bound=Callable[..., Any])
 
@@ -110,6 +125,7 @@ class RunView:
         self._urdf: rr.urdf.UrdfTree | None = None
         self._objects: set[str] = set()
         self._tmpdir: tempfile.TemporaryDirectory[str] | None = None
+        self._track: dict[str, list] = {'id': [''], 'reference': [], 'actual': [], 'chunk': [0]}
         self.rec = rr.RecordingStream(application_id, recording_id=recording_id)
         self.rec.set_log_time_enabled(False)  # wall time of logging: meaningless in a replay
         blueprint = bp.default_blueprint()
@@ -267,35 +283,62 @@ class RunView:
     def on_qtree(
         self,
         node_sequences: Sequence[str],
-        edges: Sequence[tuple[int, int, str, float, bool]],
+        edges: Sequence[tuple],
         episode: int,
         t_ns: int | None = None,
     ) -> None:
-        """Draw the Q-tree: nodes are sequences, each labelled with its incoming edge's Q.
+        """Draw the Q-tree like the paper's Figure 3 (:mod:`qtree_recorder.qtree_figure`).
+
+        Levels are rows, the top ``QTREE_TOP_K`` nodes per level by Q are kept (the extracted
+        path always), each node is labelled with its incoming action and Q, edges are grey
+        (obstacle relocated), red (infeasible) or green (target), the extracted sequence
+        orange and thick; a note above the root says what was left out.
 
         Args:
             node_sequences: node i's relocated sequence (ids joined by ','; node 0 = root '').
-            edges: ``(parent, child, object_id, q, on_best_path)`` per edge.
+            edges: ``(parent, child, object_id, q, on_best_path[, reward])`` per edge.
             episode: training episode of this snapshot.
             t_ns: time [ns since epoch], if known.
         """
         self._set_time(t_ns, episode)
-        ids = [seq or ROOT_LABEL for seq in node_sequences]
-        labels = [ROOT_LABEL] + [''] * (len(ids) - 1)
-        best = {0}
-        for parent, child, object_id, q, on_best in edges:
-            if 0 <= child < len(ids):
-                labels[child] = f'{object_id} {q:+.2f}'
-                if on_best:
-                    best.update((parent, child))
-        colors = [BEST_NODE_COLOR if i in best else NODE_COLOR for i in range(len(ids))]
-        radii = [9.0 if i in best else 5.0 for i in range(len(ids))]
-        positions = bp.tree_layout(len(ids), [(p, c) for p, c, *_ in edges])
+        drawing = layout_tree(node_sequences, edges, top_k=QTREE_TOP_K)
+        order = sorted(drawing.positions)
+        scale = np.array([QTREE_X_SPACING, QTREE_Y_SPACING])
+        xy = {n: np.asarray(drawing.positions[n], dtype=float) * scale for n in order}
+        incoming = {e.child: e for e in drawing.edges if e.tree_edge}
+        on_path = set(drawing.path)
+
+        def node_color(n: int) -> tuple[int, int, int]:
+            if n in on_path:
+                return HIGHLIGHT_COLOR
+            edge = incoming.get(n)
+            return EDGE_COLORS[edge.kind] if edge is not None else NODE_COLOR
+
+        labels = [
+            f'{incoming[n].object_id} Q={incoming[n].q:+.1f}'
+            if n in incoming
+            else f'{ROOT_LABEL} (episode {episode})'
+            for n in order
+        ]
         self.rec.log(
-            bp.QTREE_ENTITY,
-            rr.GraphNodes(ids, positions=positions, labels=labels, colors=colors, radii=radii,
-                          show_labels=True),
-            rr.GraphEdges([(ids[p], ids[c]) for p, c, *_ in edges], graph_type='directed'),
+            f'{bp.QTREE_ENTITY}/nodes',
+            rr.Points2D([xy[n] for n in order], labels=labels,
+                        colors=[node_color(n) for n in order],
+                        radii=[9.0 if n in on_path else 5.0 for n in order], show_labels=True),
+        )  # fmt: skip
+        self.rec.log(
+            f'{bp.QTREE_ENTITY}/edges',
+            rr.LineStrips2D([[xy[e.parent], xy[e.child]] for e in drawing.edges],
+                            colors=[HIGHLIGHT_COLOR if e.highlighted else EDGE_COLORS[e.kind]
+                                    for e in drawing.edges],
+                            radii=[3.0 if e.highlighted else 1.0 for e in drawing.edges]),
+        )  # fmt: skip
+        note = (f'top {QTREE_TOP_K} per level by Q: {len(order)} of {drawing.total_nodes} nodes'
+                if drawing.omitted_nodes else f'all {drawing.total_nodes} nodes')  # fmt: skip
+        self.rec.log(
+            f'{bp.QTREE_ENTITY}/note',
+            rr.Points2D([xy[0] - [0.0, QTREE_Y_SPACING * 0.8]] if order else [[0.0, 0.0]],
+                        labels=[note], radii=[0.5], show_labels=True),
         )  # fmt: skip
 
     @_guarded
@@ -327,6 +370,57 @@ class RunView:
             self.rec.log(f'{bp.STATS_ENTITY}/{name}', rr.Scalars(float(value)))
 
     @_guarded
+    def on_tracking(
+        self,
+        object_id: str,
+        phase: str,
+        reference: Sequence[float],
+        actual: Sequence[float],
+        error_m: float,
+        t_ns: int,
+        message: str = '',
+    ) -> None:
+        """One closed-loop tick: EE reference vs actual path of ``object_id``, error curve.
+
+        Args:
+            object_id: the object being relocated.
+            phase: ``'tracking'``, ``'settling'``, ``'done'`` or ``'stopped'``.
+            reference: reference EE position [m] (3,).
+            actual: EE position at the measured joints [m] (3,).
+            error_m: EE position error [m].
+            t_ns: time [ns since epoch].
+            message: why the execution stopped (``'stopped'``).
+        """
+        self._set_time(t_ns)
+        if phase == 'stopped':
+            self.rec.log(EVENTS_STOP, rr.TextLog(message or 'stopped', level='WARN'))
+            return
+        track = self._track
+        if track['id'][0] != object_id:
+            track['id'][0], track['reference'], track['actual'], track['chunk'] = (
+                object_id,
+                [],
+                [],
+                [0],
+            )
+        track['reference'].append(np.asarray(reference, dtype=float)[:3])
+        track['actual'].append(np.asarray(actual, dtype=float)[:3])
+        self.rec.log(f'{bp.TRACKING_ENTITY}/error_mm', rr.Scalars(float(error_m) * 1e3))
+        if len(track['actual']) < TRACK_EVERY and phase != 'done':
+            return
+        # Each piece of path is logged once, to its own entity (the data grows linearly).
+        chunk = track['chunk'][0]
+        for name in ('reference', 'actual'):
+            self.rec.log(
+                f'{bp.TRACKING_ENTITY}/{object_id}/{name}/{chunk:04d}',
+                rr.LineStrips3D([np.array(track[name])], colors=[TRACK_COLORS[name]],
+                                radii=[0.003]),
+                rr.CoordinateFrame(bp.WORLD_FRAME),
+            )  # fmt: skip
+            track[name] = track[name][-1:]  # the next piece starts where this one ends
+        track['chunk'][0] = chunk + 1
+
+    @_guarded
     def on_message(self, topic: str, msg: Any, t_ns: int) -> bool:
         """Log a decoded message of one of :data:`TOPICS`; other topics are ignored.
 
@@ -356,7 +450,7 @@ class RunView:
             self.on_ee_path(msg.object_id, pose_array(msg.ee_path), bool(msg.feasible), t_ns)
         elif topic == '/qtree':
             edges = [(int(e.parent), int(e.child), str(e.object_id), float(e.q),
-                      bool(e.on_best_path)) for e in msg.edges]  # fmt: skip
+                      bool(e.on_best_path), float(e.reward)) for e in msg.edges]  # fmt: skip
             self.on_qtree(list(msg.node_sequences), edges, int(msg.episode), t_ns)
         elif topic == '/training_stats':
             self.on_training_stats(
@@ -368,6 +462,12 @@ class RunView:
                 float(msg.epsilon),
                 t_ns,
             )
+        elif topic == '/motion_planner/tracking':
+            ref, act = msg.ee_reference.position, msg.ee_measured.position
+            self.on_tracking(
+                str(msg.object_id), str(msg.phase), (ref.x, ref.y, ref.z), (act.x, act.y, act.z),
+                float(msg.error_m), t_ns, str(msg.message),
+            )  # fmt: skip
         elif topic == '/robot_description':
             if self._urdf is None:
                 self._tmpdir = tempfile.TemporaryDirectory(prefix='qtree_urdf_')

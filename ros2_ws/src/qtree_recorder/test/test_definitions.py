@@ -154,3 +154,17 @@ def test_type_hash_from_the_installed_json(library: DefinitionLibrary) -> None:
     assert library.type_hash('qtree_msgs/msg/Scene').startswith('RIHS01_')
     assert library.type_hash('tf2_msgs/msg/TFMessage') == ''  # bundled text, no JSON
     assert library.type_hash('no_such_pkg/msg/X') == ''
+
+
+def test_tracking_state_is_complete(library: DefinitionLibrary) -> None:
+    definition = library.definition('qtree_msgs/msg/TrackingState')
+    assert definition.complete and definition.missing == ()
+    assert blocks(definition.text) == [
+        'geometry_msgs/Pose',
+        'geometry_msgs/Point',
+        'geometry_msgs/Quaternion',
+        'std_msgs/Header',
+        'builtin_interfaces/Time',
+    ]
+    types = get_types_from_msg(definition.text, 'qtree_msgs/msg/TrackingState')
+    assert 'qtree_msgs/msg/TrackingState' in types

@@ -66,11 +66,13 @@ def test_saved_rrd_holds_every_part_of_the_view(tmp_path: Path, urdf: Path) -> N
         '/j2s7s300/visual_geometries/j2s7s300_link_base/visual_0',
         '/tf/j2s7s300_joint_1', '/tf/j2s7s300_joint_7', '/tf/j2s7s300_joint_finger_tip_3',
         '/scene/objects/table', '/scene/objects/T', '/scene/objects/O1', '/scene/drop_zone',
-        '/plans/O1', '/events', '/qtree',
+        '/plans/O1', '/events', '/qtree/nodes', '/qtree/edges', '/qtree/note',
         '/stats/q_bar', '/stats/nodes', '/stats/edges', '/stats/mp_calls', '/stats/epsilon',
     }  # fmt: skip
     assert expected <= entities, expected - entities
-    assert FX.rrd_column(rrd, '/qtree', 'GraphNodes:node_ids') == [['root', 'O1', 'O1,T']]
+    labels = FX.rrd_column(rrd, '/qtree/nodes', 'Points2D:labels')
+    assert labels == [['s_H (episode 3)', 'O1 Q=+0.5', 'T Q=+1.0']]
+    assert len(FX.rrd_column(rrd, '/qtree/edges', 'LineStrips2D:strips')[0]) == 2
     assert FX.rrd_column(rrd, '/stats/q_bar', 'Scalars:scalars') == [[1.5]]
     colors = FX.rrd_column(rrd, '/scene/objects/O1', 'Cylinders3D:colors')
     assert colors and colors[-1][0] != FX.rrd_column(rrd, '/scene/objects/T',
@@ -154,3 +156,36 @@ def test_reason_names_match_the_service_definition() -> None:
         (int(value), name) for name, value in re.findall(r'uint16 (\w+)=(\d+)', srv.read_text())
     )
     assert constants == REASONS
+
+
+def test_tracking_shows_reference_and_actual_paths_and_the_error(tmp_path: Path) -> None:
+    from types import SimpleNamespace as Ns
+
+    def point(x, y, z):
+        return Ns(position=Ns(x=x, y=y, z=z))
+
+    rrd = tmp_path / 'tracking.rrd'
+    view = RunView(mode='save', rrd_path=rrd)
+    for k in range(60):
+        msg = Ns(object_id='O2', phase='tracking' if k < 59 else 'done', message='',
+                 ee_reference=point(0.3 + 0.01 * k, 0.0, 0.2),
+                 ee_measured=point(0.3 + 0.01 * k, 0.002, 0.2), error_m=0.002)  # fmt: skip
+        assert view.on_message('/motion_planner/tracking', msg, T_NS + k * 10_000_000)
+    stop = Ns(object_id='O2', phase='stopped', message='closed loop stopped: intruder',
+              ee_reference=point(0, 0, 0), ee_measured=point(0, 0, 0), error_m=0.0)  # fmt: skip
+    view.on_message('/motion_planner/tracking', stop, T_NS + 700_000_000)
+    view.close()
+    assert view.error_count == 0
+    entities = FX.rrd_entities(rrd)
+    pieces = {
+        '/tracking/O2/reference/0000',
+        '/tracking/O2/actual/0000',
+        '/tracking/O2/actual/0001',
+    }
+    assert pieces | {'/tracking/error_mm'} <= entities
+    errors = FX.rrd_column(rrd, '/tracking/error_mm', 'Scalars:scalars')
+    assert len(errors) == 60 and abs(errors[0][0] - 2.0) < 1e-9
+    first = FX.rrd_column(rrd, '/tracking/O2/actual/0000', 'LineStrips3D:strips')[0][0]
+    second = FX.rrd_column(rrd, '/tracking/O2/actual/0001', 'LineStrips3D:strips')[0][0]
+    assert len(first) == 50 and len(second) == 11  # pieces join: 50 + 10 new ticks + 1 shared
+    assert first[-1] == second[0]

@@ -52,6 +52,46 @@ def extract_sequence(tree: QTree) -> tuple[str, ...]:
     return tuple(edge.action for edge in path)
 
 
+EXTRACTION_EQ19 = 'eq19'
+EXTRACTION_FALLBACK = 'best-known-fallback'
+EXTRACTION_NONE = 'none'
+
+
+def extract(tree: QTree) -> tuple[tuple[str, ...], str]:
+    """The learned sequence and how it was found: eq. (19), else the best known sequence.
+
+    Eq. (19) can return nothing although episodes reached the target: for the paper's policies
+    the reward of the target propagates one edge per revisit, so after a short training the root
+    edges may all still hold 0 and the greedy walk (ties: first edge) ends in a dead branch. Then
+    the best explored target-reaching sequence (:func:`best_known_sequence`) is returned,
+    labelled ``'best-known-fallback'``.
+
+    Returns:
+        (sequence, method): method is ``'eq19'``, ``'best-known-fallback'`` or ``'none'``
+        (``sequence == ()``: no explored sequence reaches the target).
+    """
+    sequence = extract_sequence(tree)
+    if sequence:
+        return sequence, EXTRACTION_EQ19
+    sequence = best_known_sequence(tree)
+    return sequence, EXTRACTION_FALLBACK if sequence else EXTRACTION_NONE
+
+
+def path_of(tree: QTree, sequence: tuple[str, ...]) -> list[Edge]:
+    """The edges that ``sequence`` walks from the root (stops where the tree has no such edge)."""
+    path: list[Edge] = []
+    key: NodeKey = ()
+    for action in sequence:
+        if key not in tree:
+            break
+        edge = tree.node(key).children.get(action)
+        if edge is None:
+            break
+        path.append(edge)
+        key = edge.child
+    return path
+
+
 def best_known_sequence(tree: QTree) -> tuple[str, ...]:
     """Eq. (19) on the steady-state values of what the tree knows, without modifying it.
 

@@ -9,7 +9,7 @@ from qtree_msgs.msg import ObjectState, QTreeEdge, Scene, TrainingStats
 from qtree_msgs.msg import QTree as QTreeMsg
 
 from qtree_task_planner.exceptions import InvalidScenarioError
-from qtree_task_planner.extraction import greedy_path
+from qtree_task_planner.extraction import extract, path_of
 from qtree_task_planner.training import EpisodeStats, TrainingResult
 from qtree_task_planner.tree import QTree
 
@@ -75,9 +75,10 @@ def feedback_msg(stats: EpisodeStats) -> RetrieveTarget.Feedback:
 
 
 def tree_msg(tree: QTree, episode: int, stamp: Any) -> QTreeMsg:
-    """A /qtree snapshot: every node (ids joined by ',') and edge, best path marked (eq. 19)."""
+    """A /qtree snapshot: every node (ids joined by ',') and edge; the edges of the extracted
+    sequence (eq. 19, or the best known one when eq. 19 finds none) are marked on_best_path."""
     index = {node.key: i for i, node in enumerate(tree.nodes())}
-    best = {(edge.parent, edge.action) for edge in greedy_path(tree)}
+    best = {(edge.parent, edge.action) for edge in path_of(tree, extract(tree)[0])}
     edges = [
         QTreeEdge(
             parent=index[edge.parent],
@@ -103,6 +104,8 @@ def result_msg(
         message=message,
         executed=executed,
         first_optimal_episode=-1,
+        first_learned_level_episode=-1,
+        extraction='none',
     )
     if result is not None:
         msg.sequence = list(result.sequence)
@@ -112,4 +115,6 @@ def result_msg(
         msg.first_optimal_episode = result.first_optimal_episode
         msg.converged = result.converged
         msg.training_time = float(result.wall_time_s)
+        msg.extraction = result.extraction
+        msg.first_learned_level_episode = result.first_learned_level_episode
     return msg

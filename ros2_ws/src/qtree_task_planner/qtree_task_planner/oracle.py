@@ -16,6 +16,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, Protocol, runtime_checkable
 
+from qtree_task_planner.exceptions import OracleUnavailableError
+from qtree_task_planner.retry import Backoff
+
 SetKey = tuple[frozenset[str], str]
 
 
@@ -98,6 +101,9 @@ class MemoOracle:
         return self.results[key]
 
 
+PLANNING_TIMEOUT = 301  # RelocateObject.TIMEOUT / stpik_motion_planner Reason.TIMEOUT
+
+
 class MotionPlannerOracle:
     """The real in-process motion planner (``stpik_motion_planner.planner.MotionPlanner``).
 
@@ -126,9 +132,21 @@ class MotionPlannerOracle:
         self.planning_time_s = 0.0
 
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
-        """Ask the planner (``check(object_id, relocated_ids)``) and count real runs."""
+        """Ask the planner (``check(object_id, relocated_ids)``) and count real runs.
+
+        A planning TIMEOUT (301: the time limit ran out, e.g. on a loaded machine; not cached by
+        the planner) is not an answer: it is asked again up to ``Backoff().retries`` times (#18).
+
+        Raises:
+            OracleUnavailableError: still TIMEOUT after the retries.
+        """
         self.queries += 1
-        result = self.planner.check(object_id, list(relocated))
+        for _ in range(Backoff().retries + 1):
+            result = self.planner.check(object_id, list(relocated))
+            if int(getattr(result, 'reason', 0)) != PLANNING_TIMEOUT:
+                break
+        else:
+            raise OracleUnavailableError(object_id, tuple(relocated), f'TIMEOUT: {result.message}')
         if not getattr(result, 'from_cache', False):
             self.planner_runs += 1
             self.planning_time_s += float(getattr(result, 'planning_time', 0.0) or 0.0)

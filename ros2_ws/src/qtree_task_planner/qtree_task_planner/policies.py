@@ -16,13 +16,22 @@ Interpretation of the points the paper leaves open (documented choices):
 * LRND: uniform among the candidate actions.
 * H-LRND: the target first if it was never tried from this node; otherwise uniform among
   "actions not selected in previous episodes or already selected but corresponding to a
-  positive reward". Eq. (8) gives only 0 or 100 to feasible actions, so a strictly positive
-  reward would forbid ever going back through a relocated obstacle and the search would stall
-  once all children of the root are tried; we read "positive" as non-negative (not -1), i.e.
-  uniform among the candidate actions. H-LRND therefore differs from LRND by the target-first rule.
-* H-eG: epsilon is drawn per step (classical epsilon-greedy): with probability eps(k) of eq. (9)
-  explore with the H-LRND rule, otherwise exploit: the candidate with the largest Q, an untried
-  candidate counting as Q = 0 (the value a new obstacle edge starts with), ties broken uniformly.
+  positive reward". Two readings (``hlrnd_rule``):
+
+  - ``'not-failed'`` (default): "positive" as "not -1": uniform among the candidate actions, so
+    H-LRND = LRND + target-first. Every feasible branch keeps being explored, the tree converges
+    to the values of eq. (17) and eq. (19) returns the optimum (100 % optimal on S1-S3).
+  - ``'positive-q'``: "positive" as a positive EDGE WEIGHT: uniform among the untried
+    candidates and those whose edge has Q > 0; when none qualifies (all tried, none with Q > 0
+    yet), uniform among all candidates. Branches whose values have not risen yet are not
+    re-entered, so training stops sooner and on fewer edges, but often on a sub-optimal sequence.
+    (Eq. (8) gives only 0 or 100 to feasible actions, so the reward itself cannot be the test:
+    a strictly positive reward would forbid going back through any relocated obstacle.)
+* H-eG: with probability eps(k) of eq. (9) explore with the H-LRND rule, otherwise exploit: the
+  candidate with the largest Q, an untried candidate counting as Q = 0 (the value a new obstacle
+  edge starts with), ties broken uniformly. The coin (``epsilon_coin``) is drawn per step
+  (``'step'``, default: the classical epsilon-greedy) or once per episode (``'episode'``: a whole
+  episode explores or exploits).
 * eps(k) is reported as 1 for LRND/H-LRND/RND (always exploring) in the statistics.
 * H-EG-SET (ours, not in the paper): H-eG on a tree with set sharing (see
   :mod:`qtree_task_planner.tree`): one node per SET of relocated objects, so a known
@@ -47,6 +56,8 @@ from qtree_task_planner.exceptions import InvalidParameterError, UnknownPolicyEr
 from qtree_task_planner.tree import NodeKey, QTree
 
 POLICY_NAMES = ('RND', 'LRND', 'H-LRND', 'H-EG', 'H-EG-SET', 'H-EG-SET-PLAIN')
+HLRND_RULES = ('not-failed', 'positive-q')  # readings of H-LRND's "positive reward"
+EPSILON_COINS = ('step', 'episode')  # when H-eG draws its explore/exploit coin
 
 
 def epsilon_schedule(
@@ -101,6 +112,8 @@ class Policy:
         epsilon0: eps_0 of eq. (9).
         epsilon_min: eps_min of eq. (9).
         max_episodes: Ep_max of eq. (9).
+        hlrnd_rule: one of :data:`HLRND_RULES` (the H-LRND rule, also H-eG's exploration).
+        epsilon_coin: one of :data:`EPSILON_COINS`.
     """
 
     name: str
@@ -113,6 +126,18 @@ class Policy:
     epsilon0: float = 1.0
     epsilon_min: float = 1e-4
     max_episodes: int = 5000
+    hlrnd_rule: str = 'not-failed'
+    epsilon_coin: str = 'step'
+
+    def episode_coin(self, rng: np.random.Generator, episode: int) -> bool | None:
+        """Draw the per-episode coin (``epsilon_coin='episode'``): True = explore this episode.
+
+        Returns None (no draw, the generator untouched) for per-step coins and non-greedy
+        policies.
+        """
+        if not (self.greedy and self.epsilon_coin == 'episode'):
+            return None
+        return bool(rng.random() < self.epsilon(episode))
 
     def epsilon(self, episode: int) -> float:
         """eps(k) of eq. (9) for the greedy policies, 1 (always exploring) for the others."""
@@ -121,7 +146,12 @@ class Policy:
         return epsilon_schedule(episode, self.epsilon0, self.epsilon_min, self.max_episodes)
 
     def select(
-        self, tree: QTree, key: NodeKey, rng: np.random.Generator, episode: int
+        self,
+        tree: QTree,
+        key: NodeKey,
+        rng: np.random.Generator,
+        episode: int,
+        explore: bool | None = None,
     ) -> str | None:
         """Choose the next action from a node (Algorithm 1, line 5).
 
@@ -130,6 +160,7 @@ class Policy:
             key: key of the current, non-terminal node.
             rng: the training's random generator.
             episode: k, 1-based (for eq. (9)).
+            explore: this episode's coin (:meth:`episode_coin`); None draws one per step.
 
         Returns:
             The object to relocate, or None when no candidate is left (dead end).
@@ -143,16 +174,23 @@ class Policy:
             return None
         if self.name == 'LRND':
             return _uniform(options, rng)
-        if self.greedy and rng.random() >= self.epsilon(episode):
-            return _argmax_q(tree, key, options, rng)
+        if self.greedy:
+            exploit = rng.random() >= self.epsilon(episode) if explore is None else not explore
+            if exploit:
+                return _argmax_q(tree, key, options, rng)
         return self._heuristic(tree, key, options, rng)
 
     def _heuristic(
         self, tree: QTree, key: NodeKey, options: list[str], rng: np.random.Generator
     ) -> str | None:
-        """H-LRND rule: the target if untried here, else uniform among the candidates."""
-        if self.target_id in options and self.target_id not in tree.node(key).children:
+        """H-LRND rule: the target if untried here, else uniform among the candidates (or, with
+        ``hlrnd_rule='positive-q'``, among the untried ones and those with Q > 0 when any)."""
+        children = tree.node(key).children
+        if self.target_id in options and self.target_id not in children:
             return self.target_id
+        if self.hlrnd_rule == 'positive-q':
+            positive = [a for a in options if a not in children or children[a].q > 0.0]
+            options = positive or options
         return _uniform(options, rng)
 
 
@@ -192,6 +230,8 @@ def make_policy(
     epsilon0: float = 1.0,
     epsilon_min: float = 1e-4,
     max_episodes: int = 5000,
+    hlrnd_rule: str = 'not-failed',
+    epsilon_coin: str = 'step',
 ) -> Policy:
     """Build a policy by name.
 
@@ -202,6 +242,8 @@ def make_policy(
         epsilon0: eps_0 of eq. (9), in (0, 1].
         epsilon_min: eps_min of eq. (9), in (0, eps_0].
         max_episodes: Ep_max >= 1.
+        hlrnd_rule: one of :data:`HLRND_RULES`.
+        epsilon_coin: one of :data:`EPSILON_COINS`.
 
     Returns:
         The policy.
@@ -220,6 +262,12 @@ def make_policy(
         raise InvalidParameterError('epsilon_min', epsilon_min, reason)
     if max_episodes < 1:
         raise InvalidParameterError('max_episodes', max_episodes, 'must be > 0')
+    if hlrnd_rule not in HLRND_RULES:
+        raise InvalidParameterError('hlrnd_rule', hlrnd_rule, f'must be one of {HLRND_RULES}')
+    if epsilon_coin not in EPSILON_COINS:
+        raise InvalidParameterError(
+            'epsilon_coin', epsilon_coin, f'must be one of {EPSILON_COINS}'
+        )
     if target_id not in movable_ids:
         raise InvalidParameterError('target_id', target_id, 'must be one of the movable objects')
     return Policy(
@@ -233,4 +281,6 @@ def make_policy(
         epsilon0=epsilon0,
         epsilon_min=epsilon_min,
         max_episodes=max_episodes,
+        hlrnd_rule=hlrnd_rule,
+        epsilon_coin=epsilon_coin,
     )

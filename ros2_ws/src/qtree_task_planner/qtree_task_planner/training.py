@@ -24,7 +24,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from qtree_task_planner.exceptions import InvalidParameterError
-from qtree_task_planner.extraction import best_known_sequence, extract_sequence
+from qtree_task_planner.extraction import (
+    EXTRACTION_NONE,
+    best_known_sequence,
+    extract,
+    extract_sequence,
+)
 from qtree_task_planner.oracle import FeasibilityOracle
 from qtree_task_planner.policies import Policy, make_policy
 from qtree_task_planner.rewards import reward
@@ -35,6 +40,7 @@ STOP_MAX_EPISODES = 'max_episodes'
 STOP_TARGET = 'target_reached'  # RND only
 STOP_CANCELLED = 'cancelled'
 STOP_TIME = 'time_limit'
+EXTRACTION_RND = 'first-target-episode'  # RND: the sequence of its first target-reaching episode
 
 
 @dataclass(frozen=True)
@@ -53,7 +59,11 @@ class TrainingConfig:
         steady_episodes: consecutive episodes eq. (11) must hold, >= 1.
         time_limit_s: optional wall-time cap [s] (used for RND).
         optimal_level: known optimal level (exact reference) for the first-optimal episode; when
-            None, the level of the finally extracted sequence is used.
+            None, ``first_optimal_episode`` is -1 and only ``first_learned_level_episode`` (the
+            first episode reaching the level of the learned sequence) is reported.
+        hlrnd_rule: H-LRND reading, ``'not-failed'`` (default) or ``'positive-q'``
+            (:mod:`qtree_task_planner.policies`).
+        epsilon_coin: H-eG coin per ``'step'`` (default) or per ``'episode'``.
     """
 
     policy: str = 'H-EG'
@@ -67,6 +77,8 @@ class TrainingConfig:
     steady_episodes: int = 50
     time_limit_s: float | None = None
     optimal_level: int | None = None
+    hlrnd_rule: str = 'not-failed'
+    epsilon_coin: str = 'step'
 
     def __post_init__(self) -> None:
         """Validate every field.
@@ -135,10 +147,17 @@ class TrainingResult:
         converged: the steady state of eq. (11) was reached.
         stop_reason: one of the ``STOP_*`` constants.
         first_optimal_episode: first episode reaching the target through a sequence of the
-            optimal level, -1 if never.
-        optimal_level: the level used for ``first_optimal_episode`` (0 if unknown).
+            known optimal level (``TrainingConfig.optimal_level``); -1 if never or if the optimal
+            level is unknown.
+        optimal_level: the known optimal level (0 if unknown).
         wall_time_s: training time [s].
         history: per-episode statistics.
+        first_learned_level_episode: first episode reaching the target through a sequence as
+            long as the learned one (-1 without a learned sequence). Equal to
+            ``first_optimal_episode`` only when the learned sequence is optimal.
+        extraction: how ``sequence`` was obtained: ``'eq19'`` (greedy walk of eq. 19),
+            ``'best-known-fallback'`` (eq. 19 found none; the best explored target-reaching
+            sequence), ``'first-target-episode'`` (RND) or ``'none'``.
     """
 
     policy: str
@@ -152,6 +171,8 @@ class TrainingResult:
     optimal_level: int
     wall_time_s: float
     history: list[EpisodeStats] = field(repr=False)
+    first_learned_level_episode: int = -1
+    extraction: str = EXTRACTION_NONE
 
     @property
     def success(self) -> bool:
@@ -203,6 +224,8 @@ class QTreeTrainer:
             epsilon0=config.epsilon0,
             epsilon_min=config.epsilon_min,
             max_episodes=config.max_episodes,
+            hlrnd_rule=config.hlrnd_rule,
+            epsilon_coin=config.epsilon_coin,
         )
         self.tree = QTree(
             target_id,
@@ -239,8 +262,9 @@ class QTreeTrainer:
         key = tree.root.key
         sequence: list[str] = []
         new_edges, reached = 0, False
+        explore = policy.episode_coin(self.rng, k)  # None unless the coin is per episode
         while True:
-            action = policy.select(tree, key, self.rng, k)  # line 5
+            action = policy.select(tree, key, self.rng, k, explore)  # line 5
             if action is None:  # dead end: every remaining action failed here
                 break
             edge = tree.node(key).children.get(action)
@@ -318,12 +342,14 @@ class QTreeTrainer:
         if self.policy.learns:
             if self.policy.share_sets:  # H-EG-SET: converge the known values before eq. (19)
                 self.tree.sweep()
-            sequence = extract_sequence(self.tree)
+            sequence, method = extract(self.tree)
         else:
             last = self.history[-1] if self.history else None
             sequence = last.sequence if last is not None and last.reached_target else ()
-        level = self.config.optimal_level or len(sequence)
+            method = EXTRACTION_RND if sequence else EXTRACTION_NONE
+        level = self.config.optimal_level or 0
         first = first_optimal_episode(self.history, level) if level else -1
+        learned = first_optimal_episode(self.history, len(sequence)) if sequence else -1
         return TrainingResult(
             policy=self.policy.name,
             sequence=sequence,
@@ -336,6 +362,8 @@ class QTreeTrainer:
             optimal_level=level,
             wall_time_s=time.monotonic() - self._started,
             history=self.history,
+            first_learned_level_episode=learned,
+            extraction=method,
         )
 
 

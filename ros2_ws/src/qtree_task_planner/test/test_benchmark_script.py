@@ -23,7 +23,7 @@ def test_synthetic_benchmark_writes_tables_and_plots(tmp_path: Path) -> None:
             '--out',
             str(tmp_path),
             '--tag',
-            '_t',
+            't',
         ]
     )
     assert code == 0
@@ -40,7 +40,8 @@ def test_synthetic_benchmark_writes_tables_and_plots(tmp_path: Path) -> None:
     assert rows[('s1', 'H-EG-SET')]['optimal_share'] == 1.0
     assert rows[('s1', 'H-EG')]['paper'] == [115, 34, 16]
     report = (tmp_path / 'benchmark_t.md').read_text()
-    assert '| H-EG | ' in report and '115 / 34 / 16' in report
+    assert '| H-εG | ' in report and '115 / 34 / 16' in report
+    assert '| exact set search (BFS, reference) | ' in report
     for name in ('fig4_first_optimal', 'fig5_episodes', 'mp_calls', 'q_bar_curves'):
         assert (tmp_path / f't_{name}.png').stat().st_size > 1000
 
@@ -50,3 +51,15 @@ def test_bad_arguments_are_rejected() -> None:
         benchmark.parse_args(['--trainings', '0'])
     with pytest.raises(SystemExit):
         benchmark.parse_args(['--ros', '--oracle', 'synthetic'])
+
+
+def test_tag_names_the_outputs_with_one_separator() -> None:
+    """``--tag X`` writes benchmark_X.* (was: benchmarkX.md); a leading '_' is not doubled."""
+    assert benchmark.parse_args(['--tag', 'dev']).tag == 'dev'
+    assert benchmark.parse_args(['--tag', '_dev']).tag == 'dev'
+    assert benchmark.parse_args([]).tag == ''
+    assert benchmark.parse_args(['--paper-sweep']).tag == 'sweep'
+    with pytest.raises(SystemExit):
+        benchmark.parse_args(['--ros', '--hlrnd-rule', 'positive-q'])
+    with pytest.raises(SystemExit):
+        benchmark.parse_args(['--sweep-windows', '0'])

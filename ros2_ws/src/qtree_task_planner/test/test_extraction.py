@@ -89,3 +89,23 @@ def test_best_known_sequence_ignores_optimism_and_matches_the_sweep() -> None:
     tree.sweep()
     assert extract_sequence(tree) == ('O3', 'T')
     assert best_known_sequence(QTree('T', 0.5, 0.9)) == ()
+
+
+def test_extract_falls_back_to_the_best_known_sequence_when_eq19_finds_none() -> None:
+    from qtree_task_planner.extraction import extract, path_of
+
+    tree = QTree('T', 0.5, 0.9)
+    tree.add_edge((), 'O2', 0.0)  # first root edge: greedy ties go here
+    tree.add_edge(('O2',), 'T', -1.0)  # ... and end in a failed target
+    tree.add_edge((), 'O1', 0.0)
+    tree.add_edge(('O1',), 'O3', 0.0)
+    tree.add_edge(('O1', 'O3'), 'T', 100.0)
+    tree.add_edge(('O1',), 'T', 100.0)
+    assert extract_sequence(tree) == ()
+    assert extract(tree) == (('O1', 'T'), 'best-known-fallback')
+    assert [e.action for e in path_of(tree, ('O1', 'T'))] == ['O1', 'T']
+    tree.node(()).children['O1'].q = 81.0  # values propagated: eq. (19) finds it
+    assert extract(tree) == (('O1', 'T'), 'eq19')
+    empty = QTree('T', 0.5, 0.9)
+    empty.add_edge((), 'T', -1.0)
+    assert extract(empty) == ((), 'none')

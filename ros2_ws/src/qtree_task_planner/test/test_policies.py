@@ -99,3 +99,40 @@ def test_policy_names_and_validation() -> None:
         make_policy('H-EG', MOVABLE, 'T', epsilon0=0.1, epsilon_min=0.5)
     with pytest.raises(InvalidParameterError, match='epsilon0'):
         make_policy('H-EG', MOVABLE, 'T', epsilon0=0.0)
+
+
+def test_positive_q_rule_prefers_untried_and_positive_edges_with_a_fallback() -> None:
+    """H-LRND, reading 'positive-q': among tried candidates only Q > 0 edges qualify."""
+    import numpy as np
+    from qtree_task_planner.policies import make_policy
+    from qtree_task_planner.tree import QTree
+
+    tree = QTree('T', 0.5, 0.9)
+    tree.add_edge((), 'T', -1.0)
+    tree.add_edge((), 'A', 0.0)
+    edge_b, _ = tree.add_edge((), 'B', 0.0)
+    movable = ('A', 'B', 'C', 'T')
+    positive = make_policy('H-LRND', movable, 'T', hlrnd_rule='positive-q')
+    plain = make_policy('H-LRND', movable, 'T')
+    rng = np.random.default_rng(0)
+    assert {positive.select(tree, (), rng, 1) for _ in range(50)} == {'C'}  # the untried one
+    assert {plain.select(tree, (), rng, 1) for _ in range(50)} == {'A', 'B', 'C'}
+    tree.add_edge((), 'C', 0.0)  # every candidate tried, none positive: all qualify
+    assert {positive.select(tree, (), rng, 1) for _ in range(50)} == {'A', 'B', 'C'}
+    edge_b.q = 45.0
+    assert {positive.select(tree, (), rng, 1) for _ in range(50)} == {'B'}
+
+
+def test_episode_coin_is_drawn_once_per_episode() -> None:
+    import numpy as np
+    from qtree_task_planner.policies import make_policy
+
+    step = make_policy('H-EG', ('A', 'T'), 'T')
+    episode = make_policy('H-EG', ('A', 'T'), 'T', epsilon_coin='episode')
+    rng = np.random.default_rng(0)
+    assert step.episode_coin(rng, 1) is None
+    state = rng.bit_generator.state
+    assert episode.episode_coin(rng, 1) is True  # eps(1) = 1: always explore
+    assert rng.bit_generator.state != state
+    late = make_policy('H-EG', ('A', 'T'), 'T', epsilon_coin='episode', max_episodes=2)
+    assert late.episode_coin(rng, 2) is False or late.epsilon(2) > 0.0

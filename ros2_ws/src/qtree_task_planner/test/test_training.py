@@ -151,3 +151,57 @@ def test_memo_oracle_counts_distinct_sets() -> None:
 def test_config_validation_names_the_field(field: str, value: float) -> None:
     with pytest.raises(InvalidParameterError, match=field):
         TrainingConfig(**{field: value})
+
+
+def test_a_short_training_that_reached_the_target_returns_the_best_known_sequence() -> None:
+    """Eq. (19) finds nothing while the root edges still hold 0; the result falls back to the
+    best explored target-reaching sequence and says so (failed before: ``sequence == ()``)."""
+    from qtree_task_planner.synthetic import synthetic_scenario
+
+    obstacles, requirements = synthetic_scenario('s2')
+    extractions = []
+    for seed in range(20):
+        oracle = TableOracle(requirements)
+        config = TrainingConfig(policy='LRND', seed=seed, max_episodes=80)
+        result = train((*obstacles, 'T'), 'T', oracle, config)
+        reached = [s for s in result.history if s.reached_target]
+        extractions.append(result.extraction)
+        if not reached:
+            assert result.sequence == () and result.extraction == 'none'
+            continue
+        assert result.sequence[-1] == 'T'
+        assert len(result.sequence) == min(len(s.sequence) for s in reached)
+        check = TableOracle(requirements)  # every step of the returned sequence is feasible
+        assert all(check.feasible(result.sequence[:i], o) for i, o in enumerate(result.sequence))
+    assert extractions.count('best-known-fallback') >= 5
+
+
+def test_first_optimal_episode_needs_the_known_optimal_level() -> None:
+    """Without the optimal level only the first episode reaching the LEARNED level is reported
+    (before: that number was reported as the first optimal episode, also when the learned
+    sequence was sub-optimal, as here: level 5 learned, level 4 reached at episode 2)."""
+    _, unknown, _ = _train('LRND', seed=3, max_episodes=60)
+    assert unknown.optimal_level == 0 and unknown.first_optimal_episode == -1
+    assert len(unknown.sequence) == 5  # sub-optimal: the toy optimum is level 4
+    first = unknown.history[unknown.first_learned_level_episode - 1]
+    assert first.reached_target and len(first.sequence) == 5
+    assert not any(
+        s.reached_target and len(s.sequence) == 5 for s in unknown.history[: first.episode - 1]
+    )
+    _, known, _ = _train('LRND', seed=3, max_episodes=60, optimal_level=4)
+    assert known.sequence == unknown.sequence  # the level only changes what is reported
+    assert known.first_optimal_episode == 2 < unknown.first_learned_level_episode == 8
+
+
+@pytest.mark.parametrize('rule', ['not-failed', 'positive-q'])
+@pytest.mark.parametrize('coin', ['step', 'episode'])
+def test_readings_train_to_a_feasible_target_sequence(rule: str, coin: str) -> None:
+    _, result, _ = _train('H-EG', seed=2, hlrnd_rule=rule, epsilon_coin=coin)
+    assert result.sequence[-1] == 'T' and result.extraction == 'eq19'
+
+
+def test_unknown_readings_are_rejected() -> None:
+    with pytest.raises(InvalidParameterError, match='hlrnd_rule'):
+        _train('H-LRND', hlrnd_rule='positive')
+    with pytest.raises(InvalidParameterError, match='epsilon_coin'):
+        _train('H-EG', epsilon_coin='trial')

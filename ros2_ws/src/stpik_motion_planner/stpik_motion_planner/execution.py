@@ -1,15 +1,19 @@
-"""Execution of a planned relocation on ``jaco2_sim``, for the ``motion_planner`` node.
+"""Execution of a planned relocation on the simulator or a real arm (``motion_planner`` node).
 
-:class:`TrajectoryExecution` streams the trajectory on ``/joint_trajectory`` segment by segment
-(approach, carry, retreat), waits on ``/joint_states`` until the arm reaches each segment's last
-sample, and attaches and releases the object through ``/jaco2_sim/attach_object``. It reads the
-node's ``execution_timeout_s``, ``joint_state_timeout_s`` and ``goal_tolerance_rad``
-parameters at every segment.
+:class:`TrajectoryExecution` streams the trajectory on the ``trajectory_topic`` parameter's topic
+(default ``/joint_trajectory``, the simulator's; on a real arm a ``joint_trajectory_controller``'s
+``~/joint_trajectory``) segment by segment (approach, carry, retreat), waits on
+``joint_state_topic`` (default ``/joint_states``) until the arm reaches each segment's last sample,
+and attaches and releases the object through the ``attach_service`` (default
+``/jaco2_sim/attach_object``, a ``qtree_msgs/srv/AttachObject`` server). The three names are
+read-only parameters declared here. It reads the node's ``execution_timeout_s``,
+``joint_state_timeout_s`` and ``goal_tolerance_rad`` parameters at every segment.
 
 Cancel (#18): ``~/cancel_execution`` (std_srvs/Trigger, e.g. the task planner cancelling its
-goal) stops the arm at once with an empty /joint_trajectory (the sim holds its position), and the
-running execution ends with ``EXECUTION_FAILED`` "execution canceled" within one 20 ms poll; no
-further segment is sent (the check and the publication of a segment are atomic with the stop).
+goal) stops the arm at once with an empty trajectory on ``trajectory_topic`` (the sim holds its
+position), and the running execution ends with ``EXECUTION_FAILED`` "execution canceled" within
+one 20 ms poll; no further segment is sent (the check and the publication of a segment are
+atomic with the stop).
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ from jaco2_description.model import ARM_JOINTS
 from qtree_msgs.msg import ObjectState
 from qtree_msgs.srv import AttachObject
 from qtree_node_support.qos import SERVICE_QOS
+from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
@@ -36,7 +41,19 @@ from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.scene_checks import format_id
 
 STATE_QOS = QoSProfile(depth=10)
-ATTACH_SERVICE_WAIT_S = 5.0  # longest wait for /jaco2_sim/attach_object to appear [s]
+ENDPOINTS = {  # read-only parameters of the node: name -> (default, description)
+    'trajectory_topic': (
+        '/joint_trajectory',
+        'trajectory_msgs/JointTrajectory topic the arm follows (a joint_trajectory_controller: '
+        '/<controller>/joint_trajectory)',
+    ),
+    'joint_state_topic': ('/joint_states', 'sensor_msgs/JointState topic of the arm'),
+    'attach_service': (
+        '/jaco2_sim/attach_object',
+        'qtree_msgs/srv/AttachObject server that grasps (attach) and releases the object',
+    ),
+}
+ATTACH_SERVICE_WAIT_S = 5.0  # longest wait for the attach service to appear [s]
 ATTACH_ANSWER_WAIT_S = 10.0  # longest wait for its answer [s]
 
 
@@ -57,12 +74,19 @@ class TrajectoryExecution:
             node: the node owning the entities and the execution parameters.
         """
         self._node = node
+        for name, (default, text) in ENDPOINTS.items():
+            node.declare_parameter(
+                name, default, ParameterDescriptor(description=text, read_only=True)
+            )
+        self.endpoints = {name: node.get_parameter(name).value for name in ENDPOINTS}
         self.q: np.ndarray | None = None
         self.state_time = -math.inf
         # /joint_states only while executing: at 100 Hz its executor wake-ups alone kept one core
         # busy (rclpy's Python executor), which slowed planning 10-50x under load.
         self._state_group = MutuallyExclusiveCallbackGroup()
-        self._trajectory_pub = node.create_publisher(JointTrajectory, '/joint_trajectory', 10)
+        self._trajectory_pub = node.create_publisher(
+            JointTrajectory, self.endpoints['trajectory_topic'], 10
+        )
         self._canceled = threading.Event()  # set by ~/cancel_execution, cleared by follow()
         self._running = False
         self._stop_lock = threading.Lock()  # a segment is sent, or the stop; never both crossed
@@ -75,7 +99,7 @@ class TrajectoryExecution:
         )
         self._attach = node.create_client(
             AttachObject,
-            '/jaco2_sim/attach_object',
+            self.endpoints['attach_service'],
             qos_profile=SERVICE_QOS,
             callback_group=MutuallyExclusiveCallbackGroup(),
         )
@@ -96,7 +120,7 @@ class TrajectoryExecution:
             self._running = True
         states = self._node.create_subscription(
             JointState,
-            '/joint_states',
+            self.endpoints['joint_state_topic'],
             self._on_joint_states,
             STATE_QOS,
             callback_group=self._state_group,
@@ -112,11 +136,15 @@ class TrajectoryExecution:
         with self._stop_lock:
             running = self._running
             self._canceled.set()
-            self._trajectory_pub.publish(JointTrajectory(joint_names=list(ARM_JOINTS)))
+            self._halt()
         response.success = True
         response.message = 'execution canceled, arm stopped' if running else 'arm stopped'
         self._node.get_logger().info(f'cancel_execution: {response.message}')
         return response
+
+    def _halt(self) -> None:
+        """Stop the arm where it is: an empty /joint_trajectory (the sim holds its position)."""
+        self._trajectory_pub.publish(JointTrajectory(joint_names=list(ARM_JOINTS)))
 
     def _on_joint_states(self, msg: JointState) -> None:
         index = {n: i for i, n in enumerate(msg.name)}
@@ -174,7 +202,8 @@ class TrajectoryExecution:
             silent = now - max(self.state_time, start)
             if silent > silence_s:
                 return (
-                    f'the simulator stopped publishing /joint_states (none for {silent:.1f} s, '
+                    f'the simulator stopped publishing {self.endpoints["joint_state_topic"]} '
+                    f'(none for {silent:.1f} s, '
                     f'joint_state_timeout_s={silence_s:.1f})'
                 )
             if now - start > timeout:

@@ -44,6 +44,7 @@ from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from stpik_motion_planner.closed_loop_execution import Execution
 from stpik_motion_planner.config import INTEGER_FIELDS, RANGES, PlannerConfig, check_value
 from stpik_motion_planner.conversions import (
     clip,
@@ -52,7 +53,6 @@ from stpik_motion_planner.conversions import (
     range_descriptor,
 )
 from stpik_motion_planner.exceptions import MotionPlannerError
-from stpik_motion_planner.execution import TrajectoryExecution
 from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.scene_checks import format_id, format_ids
@@ -116,7 +116,7 @@ class MotionPlannerNode(Node):
             SCENE_QOS,
             callback_group=MutuallyExclusiveCallbackGroup(),
         )
-        self._execution = TrajectoryExecution(self)  # /joint_trajectory, attach_object
+        self._execution = Execution(self)  # open or closed loop (execution_mode)
         self._event_pub = self.create_publisher(
             PlanningEvent, '/motion_planner/events', EVENTS_QOS
         )
@@ -148,6 +148,7 @@ class MotionPlannerNode(Node):
         return SetParametersResult(successful=True)
 
     def _on_scene(self, msg: Scene) -> None:
+        self._execution.on_scene(msg)  # the live scene of the closed loop
         with self._lock:
             if self._executing:  # the sim moves the carried object: rebuild once released
                 self._deferred_scene = msg
@@ -177,7 +178,7 @@ class MotionPlannerNode(Node):
         relocated = list(request.relocated_ids)
         result = self._answer(request.object_id, relocated, received)
         if result.feasible and request.execute:
-            result = self._execute(result, request.object_id)
+            result = self._execute(result, request.object_id, relocated)
         fill_relocate_response(response, result, clip(result.message, MAX_MESSAGE_CHARS))
         stamp = self.get_clock().now().to_msg()
         self._event_pub.publish(planning_event_msg(stamp, request, response, result))
@@ -226,7 +227,7 @@ class MotionPlannerNode(Node):
         reason = Reason.INVALID_SCENE if self._scene_error else Reason.NO_SCENE
         return PlanResult(False, reason, self._scene_error or 'no /scene received yet')
 
-    def _execute(self, result: PlanResult, object_id: str) -> PlanResult:
+    def _execute(self, result: PlanResult, object_id: str, relocated: list[str]) -> PlanResult:
         with self._lock:
             busy, self._executing = self._executing, True
         if busy:
@@ -237,7 +238,7 @@ class MotionPlannerNode(Node):
                 message='another relocation is being executed',
             )
         try:
-            return self._execution.follow(result, object_id)
+            return self._execution.follow(result, object_id, relocated)
         finally:
             with self._lock:
                 self._executing = False

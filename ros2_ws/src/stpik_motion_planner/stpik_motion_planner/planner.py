@@ -24,7 +24,6 @@ from stpik_motion_planner.cartesian_path import (
     HAND_CENTRE_M,
     CartesianPath,
     CartesianSampler,
-    approach_yaws,
     grasp_rotation,
     interpolate,
 )
@@ -35,6 +34,14 @@ from stpik_motion_planner.exceptions import (
     MotionPlannerError,
     NoCartesianPath,
     PlanningTimeout,
+)
+from stpik_motion_planner.grasp_choice import (
+    candidate_yaws,
+    carry_height,
+    converge_first,
+    grasp_height,
+    pregrasp_seeds,
+    transit_raised,
 )
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.scene_checks import validate_request, validate_scenario
@@ -90,8 +97,7 @@ class MotionPlanner:
         answer = self.precheck(object_id, relocated)
         if answer is not None:
             return answer
-        result = self.plan(object_id, relocated)
-        result = self.blockers.annotate(result, object_id, relocated)  # infeasible: who blocks
+        result = self.blockers.check(object_id, relocated)  # sweep-first, with blockers
         if result.reason != Reason.TIMEOUT:  # a timeout may pass on a quieter machine
             self.cache.put(object_id, relocated, result)
         return result
@@ -125,10 +131,14 @@ class MotionPlanner:
         return np.array([x, y, centre[2] - size[2] / 2 + half])
 
     def plan(
-        self, object_id: str, relocated: list[str], yaws: Sequence[float] | None = None
+        self,
+        object_id: str,
+        relocated: list[str],
+        yaws: Sequence[float] | None = None,
+        slot_index: int | None = None,
     ) -> PlanResult:
         """Plan without the cache (the request must be valid); ``yaws`` [rad] overrides the
-        candidate approach yaws."""
+        candidate approach yaws, ``slot_index`` the drop slot (default ``len(relocated)``)."""
         c = self.config
         start = time.perf_counter()
         deadline = start + c.time_limit_s
@@ -137,12 +147,12 @@ class MotionPlanner:
         removed = set(relocated) | {object_id}
         scene = SceneWorld(o for o in self.scenario.objects if o.id not in removed)
         sampler = CartesianSampler(scene, c)
-        slot = self.slot_position(len(relocated), obj)
+        slot = self.slot_position(len(relocated) if slot_index is None else slot_index, obj)
         centre = np.asarray(obj.position, dtype=float)
         failures: list[MotionPlannerError] = []
         try:
             if yaws is None:
-                yaws = approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad)
+                yaws = candidate_yaws(centre, c)
             for yaw in yaws:
                 t0 = time.perf_counter()
                 path = self._sample(sampler, scene, obj, yaw, slot, failures)
@@ -183,10 +193,7 @@ class MotionPlanner:
         rotation = grasp_rotation(yaw)
         axis = rotation[:, 2]
         centre = np.asarray(obj.position, dtype=float)
-        half = obj.height / 2 if obj.shape == 'cylinder' else obj.size[2] / 2
-        # Mid-height, raised on short objects so the hand keeps its margin to the table.
-        low = centre[2] - half + HAND_HALF_HEIGHT_M + c.obstacle_activation_m + 0.005
-        grasp_z = min(max(centre[2], low), centre[2] + half - 0.01)
+        grasp_z = grasp_height(obj, c.obstacle_activation_m, c.obstacle_min_distance_m)
         grasp = pin.SE3(rotation, np.r_[centre[:2], grasp_z] + c.grasp_depth_m * axis)
         if not sampler.corridor_free(grasp):
             failures.append(
@@ -203,10 +210,8 @@ class MotionPlanner:
                 NoCartesianPath(obj.id, f'no free path to the pre-grasp at yaw {yaw:.2f} rad')
             )
             return None
-        tops = [o.top_z for o in scene.objects.values() if o.role != 'static']
-        highest = max(tops, default=obj.position[2])
-        carry_z = max(
-            highest + c.lift_clearance_m + max(half, HAND_BELOW_EE_M), grasp.translation[2] + 0.05
+        carry_z = carry_height(  # over the neighbours, relocated ones too (see .grasp_choice)
+            self.scenario, obj, grasp.translation[2], c.lift_clearance_m, HAND_BELOW_EE_M
         )
         lift = pin.SE3(rotation, np.r_[grasp.translation[:2], carry_z])
         slot = slot + np.r_[0.0, 0.0, grasp_z - centre[2]]  # EE height at release
@@ -257,10 +262,10 @@ class MotionPlanner:
             return [False] * (n - 1) + [True]
 
         try:
-            seed = stpik.ready_posture(path.pregrasp.translation, self.home_q[0])
-            q_pre = stpik.converge(seed, path.pregrasp, scene, deadline=deadline)
+            seeds = pregrasp_seeds(stpik, path.pregrasp, self.home_q[0], seed=self.config.seed)
+            q_pre = converge_first(stpik, seeds, path.pregrasp, scene, deadline)
             phase = 'transit to pre-grasp'
-            to_pre = stpik.transit(self.home_q, q_pre, scene, deadline)
+            to_pre = transit_raised(stpik, self.home_q, q_pre, path.pregrasp, scene, deadline)
             phase = 'approach'
             approach = stpik.track(
                 q_pre, path.approach, scene, loose_then_tight(len(path.approach)), deadline

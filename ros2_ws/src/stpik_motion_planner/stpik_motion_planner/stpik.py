@@ -28,6 +28,7 @@ from stpik_motion_planner.exceptions import (
     SceneCollision,
     SelfCollision,
 )
+from stpik_motion_planner.grasp_choice import turned_joint
 from stpik_motion_planner.tasks import (
     EePoseTask,
     JointLimitTask,
@@ -123,8 +124,7 @@ class Stpik:
         """:data:`READY` turned to the azimuth of ``position`` [m], joint 1 nearest ``q1``."""
         reference = READY.copy()
         turned = READY[0] - math.atan2(position[1], position[0])
-        turned += 2 * math.pi * round((q1 - turned) / (2 * math.pi))
-        reference[0] = min(max(turned, self.lower[0]), self.upper[0])
+        reference[0] = turned_joint(turned, q1, self.lower[0], self.upper[0])
         return reference
 
     def reset_timers(self) -> None:

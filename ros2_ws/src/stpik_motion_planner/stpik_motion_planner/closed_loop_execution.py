@@ -1,0 +1,322 @@
+"""Closed-loop execution on ``jaco2_sim`` for the ``motion_planner`` node (paper Sect. 3.1).
+
+:class:`Execution` declares ``execution_mode`` (``closed_loop``, the default, or ``open_loop``)
+and the :class:`~stpik_motion_planner.execution_config.ExecutionConfig` parameters. In
+``open_loop`` it behaves as :class:`~stpik_motion_planner.execution.TrajectoryExecution` (whole
+segments on ``/joint_trajectory``). In ``closed_loop`` a timer at ``control_rate_hz``, in its own
+callback group, runs one :class:`~stpik_motion_planner.closed_loop.ClosedLoopController` step
+from each new ``/joint_states`` (a tick without a new measurement does nothing, so a starved
+subscription never makes the loop integrate on a stale state) and the live ``/scene``, streams
+the joint reference as ``sensor_msgs/JointState`` on ``command_topic`` (default
+``/joint_command``) and publishes a ``qtree_msgs/TrackingState`` on
+``/motion_planner/tracking``. The service thread only waits for each segment's end and attaches /
+releases the object in between.
+
+On a stop (tracking lost, a set-based task that cannot hold, a joint state with missing or extra
+joints, no joint state for ``joint_state_timeout_s``) the arm is commanded to hold its last
+measured position and the relocation is answered ``EXECUTION_FAILED`` with the reason.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import threading
+import time
+
+import numpy as np
+import pinocchio as pin
+from geometry_msgs.msg import Pose
+from jaco2_description.model import ARM_JOINTS, Jaco2Model
+from qtree_msgs.msg import ObjectState, Scene, TrackingState
+from qtree_scene.message import scenario_from_msg
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.node import Node
+from sensor_msgs.msg import JointState
+
+from stpik_motion_planner.closed_loop import (
+    ClosedLoopController,
+    ControlTick,
+    ExecutionStopped,
+    PlannedMotion,
+    measured_q,
+    segments,
+)
+from stpik_motion_planner.collision import SceneWorld
+from stpik_motion_planner.config import RANGES, PlannerConfig
+from stpik_motion_planner.conversions import range_descriptor
+from stpik_motion_planner.exceptions import InvalidConfig
+from stpik_motion_planner.execution import TrajectoryExecution
+from stpik_motion_planner.execution_config import (
+    EXECUTION_RANGES,
+    ExecutionConfig,
+    check_execution_value,
+    check_mode,
+)
+from stpik_motion_planner.result import PlanResult, Reason
+from stpik_motion_planner.scene_checks import format_id
+
+SCENE_FRAME = 'j2s7s300_link_base'  # frame of the EE poses in TrackingState
+
+
+class Execution(TrajectoryExecution):
+    """Open- or closed-loop execution of a feasible plan; owned by the node."""
+
+    def __init__(self, node: Node) -> None:
+        super().__init__(node)
+        node.declare_parameter('execution_mode', 'closed_loop')
+        node.declare_parameter('command_topic', '/joint_command')
+        defaults = ExecutionConfig()
+        for name, (low, high, text) in EXECUTION_RANGES.items():
+            descriptor = range_descriptor(text, low, high)
+            node.declare_parameter(name, getattr(defaults, name), descriptor)
+        node.add_on_set_parameters_callback(self._on_parameters)
+        check_mode(node.get_parameter('execution_mode').value)
+        self._config()  # refuse bad start-up values at once
+        self.robot = Jaco2Model()
+        self._command_pub = node.create_publisher(
+            JointState, node.get_parameter('command_topic').value, 10
+        )
+        self._tracking_pub = node.create_publisher(TrackingState, '/motion_planner/tracking', 10)
+        self._timer_group = MutuallyExclusiveCallbackGroup()
+        self._lock = threading.Lock()  # controller, scene and outcome between the two threads
+        self._segment_end = threading.Event()
+        self._controller: ClosedLoopController | None = None
+        self._scene_msg: Scene | None = None
+        self._scene_dirty = False
+        self._object_id = ''
+        self._removed: set[str] = set()
+        self._last_state_time = -math.inf  # /joint_states time of the last control step [s]
+        self._started = -math.inf
+        self._stopped = ''
+        self._state_error = ''
+
+    def _config(self) -> ExecutionConfig:
+        return ExecutionConfig(**{n: self._node.get_parameter(n).value for n in EXECUTION_RANGES})
+
+    def _on_parameters(self, params: list) -> SetParametersResult:
+        try:
+            for p in params:
+                if p.name == 'execution_mode':
+                    check_mode(p.value)
+                elif p.name in EXECUTION_RANGES:
+                    check_execution_value(p.name, p.value)
+                elif p.name == 'command_topic':
+                    raise InvalidConfig(p.name, p.value, 'fixed at start')
+        except InvalidConfig as err:
+            return SetParametersResult(successful=False, reason=str(err))
+        return SetParametersResult(successful=True)
+
+    def on_scene(self, msg: Scene) -> None:
+        """The live scene (every /scene message, also while executing)."""
+        with self._lock:
+            self._scene_msg, self._scene_dirty = msg, True
+
+    def follow(
+        self, result: PlanResult, object_id: str, relocated: list[str] | tuple = ()
+    ) -> PlanResult:
+        """Execute ``result`` in the mode of ``execution_mode``.
+
+        Args:
+            result: a feasible plan.
+            object_id: the object relocated.
+            relocated: the request's relocated ids: left out of the live scene, as the planner
+                left them out of its scene (Assumption 2).
+        """
+        self._state_error = ''
+        self._removed = {*relocated, object_id}
+        return super().follow(result, object_id)
+
+    def _on_joint_states(self, msg: JointState) -> None:
+        try:
+            self.q = measured_q(msg.name, msg.position)
+            self.state_time = time.monotonic()
+        except ExecutionStopped as err:
+            self._state_error = str(err)
+
+    def _follow_segments(self, result: PlanResult, object_id: str) -> PlanResult:
+        if self._node.get_parameter('execution_mode').value == 'open_loop':
+            return super()._follow_segments(result, object_id)
+        failure = self._closed_loop(result, object_id)
+        if not failure:
+            return result
+        return dataclasses.replace(
+            result, feasible=False, reason=Reason.EXECUTION_FAILED, message=failure
+        )
+
+    def _closed_loop(self, result: PlanResult, object_id: str) -> str:
+        """Run every segment; '' when executed, else why not."""
+        node, config = self._node, self._config()
+        silence_s = node.get_parameter('joint_state_timeout_s').value
+        deadline = time.monotonic() + silence_s
+        while self.q is None and not self._state_error and time.monotonic() < deadline:
+            time.sleep(0.01)
+        if self.q is None:
+            return self._state_error or f'no /joint_states within {silence_s:.1f} s'
+        planner_config = PlannerConfig(**{n: node.get_parameter(n).value for n in RANGES})
+        with self._lock:
+            self._object_id, self._stopped = object_id, ''
+            self._controller = ClosedLoopController(
+                self.robot, self._live_scene(), planner_config, config
+            )
+            self._scene_dirty = False
+            self._last_state_time, self._started = -math.inf, time.monotonic()
+        motion = PlannedMotion(result.times, result.joint_trajectory, self.robot)
+        timer = node.create_timer(config.period, self._on_tick, callback_group=self._timer_group)
+        try:
+            q_ref = np.array(self.q)
+            timeout = node.get_parameter('execution_timeout_s').value
+            for start, end, attach in segments(result):
+                if self._stopped:  # e.g. canceled while attaching (#18)
+                    return self._stopped
+                self._segment_end.clear()
+                with self._lock:
+                    self._controller.begin(motion, start, end, q_ref)
+                duration = result.times[end] - result.times[start]
+                if not self._segment_end.wait(duration + timeout):
+                    self._stop(f'segment to sample {end} not done in {duration + timeout:.1f} s')
+                if self._stopped:
+                    return self._stopped
+                q_ref = self._controller.q_ref
+                failure = self._grasp_or_release(object_id, attach)
+                if failure:
+                    self._stop(failure)
+                    return failure
+            return ''
+        finally:
+            timer.cancel()
+            node.destroy_timer(timer)
+            with self._lock:
+                self._controller = None
+
+    def _grasp_or_release(self, object_id: str, attach: bool | None) -> str:
+        if attach is None:
+            return ''
+        if not self._call_attach(object_id, attach):
+            return f'attach_object({format_id(object_id)}, {attach}) failed'
+        with self._lock:
+            if not attach:
+                self._controller.detach()
+                return ''
+            found = self._scene_object(object_id)
+            if found is None:
+                return f'{format_id(object_id)} is not in the last /scene'
+            spec, pose = found
+            self._controller.attach(spec, pose, np.array(self.q))
+        return ''
+
+    def _on_tick(self) -> None:
+        """One control tick (timer thread)."""
+        with self._lock:
+            controller = self._controller
+            if controller is None or self._stopped or controller.phase in ('done', 'idle'):
+                return
+            silence_s = self._node.get_parameter('joint_state_timeout_s').value
+            silent = time.monotonic() - max(self.state_time, self._started)
+            if self._state_error:
+                self._stop_locked(f'bad /joint_states: {self._state_error}')
+                return
+            if self.state_time <= self._last_state_time:  # no new measurement: wait for it
+                if silent > silence_s:
+                    self._stop_locked(
+                        f'the simulator stopped publishing /joint_states (none for '
+                        f'{silent:.1f} s, joint_state_timeout_s={silence_s:.1f})'
+                    )
+                return
+            self._last_state_time = self.state_time
+            try:
+                if self._scene_dirty:
+                    controller.set_scene(self._live_scene())
+                    self._scene_dirty = False
+                tick = controller.step(np.array(self.q))
+            except ExecutionStopped as err:
+                self._stop_locked(str(err))
+                return
+            except Exception as err:  # a bad scene or state must not kill the node
+                self._stop_locked(f'unexpected {type(err).__name__}: {err}')
+                return
+        self._command_pub.publish(command_msg(tick.q_ref))
+        self._tracking_pub.publish(self._tracking_msg(tick, ''))
+        if tick.phase == 'done':
+            self._segment_end.set()
+
+    def _halt(self) -> None:
+        """Cancel (#18): also end a running closed loop, holding the measured position."""
+        super()._halt()
+        if self._controller is not None:
+            self._stop('execution canceled')
+
+    def _stop(self, why: str) -> None:
+        with self._lock:
+            self._stop_locked(why)
+
+    def _stop_locked(self, why: str) -> None:
+        """Hold the last measured position, publish the stop, wake the service thread."""
+        if self._stopped:
+            return
+        self._stopped = f'closed loop stopped: {why}'
+        self._node.get_logger().warning(self._stopped)
+        if self.q is not None:
+            self._command_pub.publish(command_msg(self.q))
+        msg = TrackingState(object_id=self._object_id, phase='stopped', message=self._stopped)
+        msg.header.stamp = self._node.get_clock().now().to_msg()
+        self._tracking_pub.publish(msg)
+        self._segment_end.set()
+
+    def _live_scene(self) -> SceneWorld:
+        """Objects still in the clutter, but the carried one and the request's relocated ones."""
+        msg = self._scene_msg
+        if msg is None:
+            return SceneWorld([])
+        keep = {
+            o.id
+            for o in msg.objects
+            if o.status == ObjectState.STATUS_IN_CLUTTER and o.id not in self._removed
+        }
+        return SceneWorld(o for o in scenario_from_msg(msg).objects if o.id in keep)
+
+    def _scene_object(self, object_id: str):
+        msg = self._scene_msg
+        if msg is None:
+            return None
+        for spec, o in zip(scenario_from_msg(msg).objects, msg.objects, strict=True):
+            if spec.id == object_id:
+                p, r = o.pose.position, o.pose.orientation
+                return spec, pin.XYZQUATToSE3(np.array([p.x, p.y, p.z, r.x, r.y, r.z, r.w]))
+        return None
+
+    def _tracking_msg(self, tick: ControlTick, message: str) -> TrackingState:
+        msg = TrackingState(
+            object_id=self._object_id,
+            phase=tick.phase,
+            plan_time=tick.plan_time,
+            joint_names=list(ARM_JOINTS),
+            reference=[float(v) for v in tick.q_ref],
+            measured=[float(v) for v in tick.q_meas],
+            ee_reference=pose_msg(tick.ee_ref),
+            ee_measured=pose_msg(tick.ee_meas),
+            error_m=tick.error_m,
+            error_rad=tick.error_rad,
+            clearance_m=tick.clearance_m,
+            active_tasks=list(tick.active),
+            step_time_s=tick.step_s,
+            message=message,
+        )
+        msg.header.stamp = self._node.get_clock().now().to_msg()
+        msg.header.frame_id = SCENE_FRAME
+        return msg
+
+
+def command_msg(q: np.ndarray) -> JointState:
+    """sensor_msgs/JointState reference of the 7 arm joints [rad]."""
+    return JointState(name=list(ARM_JOINTS), position=[float(v) for v in q])
+
+
+def pose_msg(xyzquat: np.ndarray) -> Pose:
+    """xyz [m] + quaternion xyzw (7,) → Pose."""
+    pose = Pose()
+    pose.position.x, pose.position.y, pose.position.z = (float(v) for v in xyzquat[:3])
+    o = pose.orientation
+    o.x, o.y, o.z, o.w = (float(v) for v in xyzquat[3:])
+    return pose

@@ -1,0 +1,154 @@
+"""Closed-loop executor core (stpik_motion_planner.closed_loop) against a toy servo plant.
+
+The plant: each tick the joints go to the streamed reference + a constant offset, within the
+velocity limits (as jaco2_sim's integrator does; this package may not import jaco2_sim).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from jaco2_description.model import ARM_JOINTS
+from qtree_scene.scene import ObjectSpec
+from stpik_motion_planner.closed_loop import (
+    ClosedLoopController,
+    ExecutionStopped,
+    PlannedMotion,
+    measured_q,
+    segments,
+)
+from stpik_motion_planner.collision import SceneWorld
+from stpik_motion_planner.exceptions import InvalidConfig
+from stpik_motion_planner.execution_config import ExecutionConfig, check_mode
+from stpik_motion_planner.planner import MotionPlanner
+
+OFFSET = np.array([0.0, 0.05, 0.0, 0.0, 0.0, 0.0, 0.0])  # servo offset on joint 2 [rad]
+
+
+@pytest.fixture(scope='module')
+def plan(free_scene):
+    planner = MotionPlanner(free_scene)
+    result = planner.check('T', [])
+    assert result.feasible, result.message
+    return planner, result
+
+
+def _servo(q, target, robot, dt):
+    """q → target within the velocity limits (direction kept)."""
+    v = (target - q) / dt
+    ratio = float(np.max(np.abs(v) / robot.limits.velocity))
+    return q + (v / max(ratio, 1.0)) * dt
+
+
+def _closed_loop(planner, result, offset, on_tick=None):
+    robot = planner.robot
+    scene = SceneWorld(o for o in planner.scenario.objects if o.id != 'T')
+    controller = ClosedLoopController(robot, scene, planner.config)
+    motion = PlannedMotion(result.times, result.joint_trajectory, robot)
+    q = np.array(result.joint_trajectory[0])
+    q_ref = q.copy()
+    ticks, end_errors = 0, []
+    for start, end, _ in segments(result)[:2]:
+        controller.begin(motion, start, end, q_ref)
+        while controller.phase != 'done':
+            tick = controller.step(q)
+            ticks += 1
+            if on_tick is not None:
+                on_tick(ticks, controller)
+            q = _servo(q, tick.q_ref + offset, robot, controller.config.period)
+            assert ticks < 20_000
+        q_ref = controller.q_ref
+        target = motion.ee_of(result.joint_trajectory[end]).translation
+        end_errors.append(float(np.linalg.norm(motion.ee_of(q).translation - target)))
+    return end_errors
+
+
+def test_closed_loop_removes_a_joint_offset_that_open_loop_keeps(plan):
+    planner, result = plan
+    motion = PlannedMotion(result.times, result.joint_trajectory, planner.robot)
+    # Open loop: the servo settles at the planned joints + offset.
+    open_errors = []
+    for _, end, _ in segments(result)[:2]:
+        q_goal = result.joint_trajectory[end]
+        reached = motion.ee_of(q_goal + OFFSET).translation
+        open_errors.append(float(np.linalg.norm(reached - motion.ee_of(q_goal).translation)))
+    closed_errors = _closed_loop(planner, result, OFFSET)
+    assert min(open_errors) > 0.015  # 0.05 rad on the shoulder: centimetres at the hand
+    assert max(closed_errors) < 0.003  # grasp and release reached within 3 mm
+
+
+def test_closed_loop_without_disturbance_ends_on_the_plan(plan):
+    planner, result = plan
+    assert max(_closed_loop(planner, result, np.zeros(7))) < 0.003
+
+
+def test_obstacle_moved_onto_the_path_stops_with_the_reason(plan):
+    planner, result = plan
+    motion = PlannedMotion(result.times, result.joint_trajectory, planner.robot)
+    # A box put where the hand will be halfway through the approach to the grasp.
+    g = result.grasp_index
+    ahead = motion.ee_of(result.joint_trajectory[g - 2]).translation
+    box = ObjectSpec('intruder', 'obstacle', 'box', tuple(ahead), size=(0.05, 0.05, 0.05))
+    others = [o for o in planner.scenario.objects if o.id != 'T']
+
+    def drop_box(ticks, controller):
+        if ticks == 50:
+            controller.set_scene(SceneWorld([*others, box]))
+
+    with pytest.raises(ExecutionStopped) as stop:
+        _closed_loop(planner, result, np.zeros(7), drop_box)
+    assert stop.value.cause in ('obstacles', 'tracking')
+    assert 'intruder' in str(stop.value)
+
+
+def test_measured_state_checks():
+    q = measured_q([*reversed(ARM_JOINTS), 'j2s7s300_joint_finger_1'], [*range(7), 0.2][::1])
+    assert q[0] == 6.0 and q.shape == (7,)
+    with pytest.raises(ExecutionStopped, match='misses arm joints'):
+        measured_q(ARM_JOINTS[:6], [0.0] * 6)
+    with pytest.raises(ExecutionStopped, match='unknown joints'):
+        measured_q([*ARM_JOINTS, 'elbow'], [0.0] * 8)
+    with pytest.raises(ExecutionStopped, match='non-finite'):
+        measured_q(ARM_JOINTS, [math.nan] + [0.0] * 6)
+    with pytest.raises(ExecutionStopped, match='names but'):
+        measured_q(ARM_JOINTS, [0.0] * 6)
+
+
+def test_step_refuses_a_bad_measurement(plan):
+    planner, result = plan
+    controller = ClosedLoopController(planner.robot, SceneWorld([]), planner.config)
+    with pytest.raises(ExecutionStopped):
+        controller.step(np.zeros(7))  # before begin()
+    motion = PlannedMotion(result.times, result.joint_trajectory, planner.robot)
+    controller.begin(motion, 0, result.grasp_index, result.joint_trajectory[0])
+    with pytest.raises(ExecutionStopped, match='7 finite'):
+        controller.step(np.full(7, math.nan))
+
+
+@pytest.mark.parametrize(
+    'field, value',
+    [('control_rate_hz', 5.0), ('control_rate_hz', 5000.0), ('control_rate_hz', math.nan),
+     ('tracking_gain', -0.1), ('max_tracking_error_m', math.inf)],
+)  # fmt: skip
+def test_bad_execution_settings_are_refused(field, value):
+    with pytest.raises(InvalidConfig, match=field):
+        ExecutionConfig(**{field: value})
+
+
+def test_execution_mode_values():
+    assert check_mode('open_loop') == 'open_loop'
+    with pytest.raises(InvalidConfig, match='execution_mode'):
+        check_mode('closed')
+
+
+def test_planned_motion_interpolates_and_holds(plan):
+    planner, result = plan
+    motion = PlannedMotion(result.times, result.joint_trajectory, planner.robot)
+    t = 0.5 * (result.times[1] + result.times[2])
+    expected = 0.5 * (result.joint_trajectory[1] + result.joint_trajectory[2])
+    np.testing.assert_allclose(motion.joints_at(t), expected)
+    np.testing.assert_allclose(motion.joints_at(1e9), result.joint_trajectory[-1])
+    assert motion.ee_at(-1.0).isApprox(pin.SE3(planner.robot.ee_pose(result.joint_trajectory[0])))

@@ -1,0 +1,185 @@
+"""Cross-process tests of closed-loop execution: motion_planner (execution_mode) with jaco2_sim
+(streamed /joint_command, disturbances)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from jaco2_description.model import ARM_JOINTS
+from qtree_msgs.msg import ObjectState, Scene, TrackingState
+from qtree_msgs.srv import RelocateObject, ResetScene
+from qtree_scene.scenario import load_scenario
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from shape_msgs.msg import SolidPrimitive
+from stpik_motion_planner.closed_loop import PlannedMotion
+from stpik_motion_planner.planner import MotionPlanner
+
+EVERY_OBSTACLE = ['O1', 'O2', 'O3', 'O4', 'O5']
+LATCHED = QoSProfile(
+    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+)
+OFFSET = [0.0, 0.05, 0.0, 0.0, 0.0, 0.0, 0.0]
+
+
+@pytest.fixture(scope='module')
+def plan():
+    """The in-process plan of T once every obstacle is gone (what the node plans too)."""
+    planner = MotionPlanner(load_scenario('s1'))
+    result = planner.check('T', EVERY_OBSTACLE)
+    assert result.feasible, result.message
+    motion = PlannedMotion(result.times, result.joint_trajectory, planner.robot)
+    obj = load_scenario('s1').object('T')
+    grasp = motion.ee_of(result.joint_trajectory[result.grasp_index])
+    release = motion.ee_of(result.joint_trajectory[result.release_index])
+    start = grasp.actInv(pin.SE3(np.eye(3), np.asarray(obj.position, dtype=float)))
+    return result, motion, (release * start).translation
+
+
+def _graph(launch, ros_node, sim_parameters=None, planner_parameters=None):
+    sim = launch('jaco2_sim', 'sim_node', parameters={'scenario': 's1', **(sim_parameters or {})})
+    mp = launch(
+        'stpik_motion_planner',
+        'motion_planner_node',
+        parameters={'execution_timeout_s': 20.0, **(planner_parameters or {})},
+    )
+    sim.wait_for_log('ready', 30.0)
+    mp.wait_for_log('ready', 30.0)
+    mp.wait_for_log('planner rebuilt', 30.0)
+    seen: dict[str, Any] = {'scene': None, 'tracking': []}
+    ros_node.create_subscription(Scene, '/scene', lambda m: seen.update(scene=m), LATCHED)
+    ros_node.create_subscription(
+        TrackingState, '/motion_planner/tracking', seen['tracking'].append, 100
+    )
+    client = ros_node.create_client(RelocateObject, '/relocate_object')
+    return sim, mp, client, seen
+
+
+def _released_position(ros_node, seen) -> np.ndarray:
+    def relocated() -> bool:
+        scene = seen['scene']
+        return scene is not None and any(
+            o.id == 'T' and o.status == ObjectState.STATUS_RELOCATED for o in scene.objects
+        )
+
+    assert ros_node.spin_until(relocated, 10.0)
+    p = next(o for o in seen['scene'].objects if o.id == 'T').pose.position
+    return np.array([p.x, p.y, p.z])
+
+
+def _set(ros_node, node_name: str, **values) -> None:
+    from rclpy.parameter import Parameter
+    from rclpy.parameter_client import AsyncParameterClient
+
+    client = AsyncParameterClient(ros_node, node_name)
+    assert client.wait_for_services(10.0)
+    future = client.set_parameters([Parameter(n, value=v) for n, v in values.items()])
+    assert ros_node.spin_until(future.done, 10.0)
+    results = future.result().results
+    assert all(r.successful for r in results), [r.reason for r in results]
+
+
+def test_closed_loop_removes_a_joint_offset_open_loop_does_not(launch, ros_node, plan):
+    _, _, planned = plan
+    sim, mp, client, seen = _graph(launch, ros_node, {'joint_offset_rad': OFFSET})
+    request = RelocateObject.Request(object_id='T', relocated_ids=EVERY_OBSTACLE, execute=True)
+    answer = ros_node.call(client, request, 150.0)
+    assert answer.feasible, answer.message
+    closed_error = float(np.linalg.norm(_released_position(ros_node, seen) - planned))
+    ticks = [t for t in seen['tracking'] if t.phase != 'stopped']
+    assert len(ticks) > 100 and list(ticks[0].joint_names) == list(ARM_JOINTS)
+    assert ticks[-1].phase == 'done' and ticks[-1].error_m < 0.005
+    # Same relocation in open loop (goal tolerance above the offset so that it completes).
+    _set(ros_node, 'motion_planner', execution_mode='open_loop', goal_tolerance_rad=0.1)
+    reset = ros_node.create_client(ResetScene, '/jaco2_sim/reset_scene')
+    assert ros_node.call(reset, ResetScene.Request(), 30.0).success
+    assert ros_node.spin_until(
+        lambda: (
+            seen['scene'] is not None
+            and all(o.status == ObjectState.STATUS_IN_CLUTTER for o in seen['scene'].objects)
+        ),
+        10.0,
+    )
+    answer = ros_node.call(client, request, 150.0)
+    assert answer.feasible, answer.message
+    open_error = float(np.linalg.norm(_released_position(ros_node, seen) - planned))
+    print(f'\n[closed loop] placement error with a 0.05 rad offset on joint 2: closed loop '
+          f'{closed_error * 1e3:.1f} mm, open loop {open_error * 1e3:.1f} mm')  # fmt: skip
+    assert closed_error < 0.01
+    assert open_error > 0.015
+    assert sim.alive() and mp.alive()
+
+
+def test_object_moved_onto_the_path_stops_the_arm_with_the_reason(launch, ros_node, plan):
+    result, motion, _ = plan
+    sim, mp, client, seen = _graph(launch, ros_node)
+    assert ros_node.spin_until(lambda: seen['scene'] is not None, 10.0)
+    states: list[np.ndarray] = []
+    ros_node.create_subscription(
+        JointState, '/joint_states', lambda m: states.append(np.array(m.position[:7])), 10
+    )
+    request = RelocateObject.Request(object_id='T', relocated_ids=EVERY_OBSTACLE, execute=True)
+    future = client.call_async(request)
+    assert ros_node.spin_until(lambda: len(seen['tracking']) > 20, 60.0)
+    # A box where the hand will be just before the grasp, put into the live scene.
+    ahead = motion.ee_of(result.joint_trajectory[result.grasp_index - 2]).translation
+    scene = seen['scene']
+    intruder = ObjectState(
+        id='intruder',
+        role=ObjectState.ROLE_OBSTACLE,
+        shape=SolidPrimitive(type=SolidPrimitive.BOX, dimensions=[0.05, 0.05, 0.05]),
+        status=ObjectState.STATUS_IN_CLUTTER,
+    )
+    intruder.pose.position.x, intruder.pose.position.y, intruder.pose.position.z = (
+        float(v) for v in ahead
+    )
+    intruder.pose.orientation.w = 1.0
+    scene.objects.append(intruder)
+    publisher = ros_node.create_publisher(Scene, '/scene', LATCHED)
+    publisher.publish(scene)
+    assert ros_node.spin_until(future.done, 90.0), 'no answer'
+    answer = future.result()
+    print(f'\n[closed loop] intruder on the path: {answer.message}')
+    assert not answer.feasible
+    assert answer.reason == RelocateObject.Response.EXECUTION_FAILED
+    assert 'intruder' in answer.message
+    assert ros_node.spin_until(
+        lambda: any(t.phase == 'stopped' and 'intruder' in t.message for t in seen['tracking']),
+        5.0,
+    )
+    # The arm holds where it stopped.
+    assert ros_node.spin_until(lambda: len(states) > 10, 5.0)
+    held = states[-1]
+    ros_node.spin_until(lambda: False, 1.0)
+    assert np.max(np.abs(states[-1] - held)) < 0.01
+    again = ros_node.call(client, RelocateObject.Request(object_id='O3'), 30.0)
+    assert again.reason in (0, 201, 202, 203, 204, 205), again.message  # still serving
+    assert sim.alive() and mp.alive()
+
+
+def test_bad_execution_and_disturbance_parameters_are_refused(launch, ros_node):
+    from rclpy.parameter import Parameter
+    from rclpy.parameter_client import AsyncParameterClient
+
+    sim, mp, _, _ = _graph(launch, ros_node)
+    for node_name, name, value in [
+        ('motion_planner', 'control_rate_hz', 5000.0),
+        ('motion_planner', 'control_rate_hz', math.nan),
+        ('motion_planner', 'execution_mode', 'sideways'),
+        ('jaco2_sim', 'command_latency_s', -0.1),
+        ('jaco2_sim', 'measurement_noise_rad', math.nan),
+        ('jaco2_sim', 'joint_offset_rad', [0.0, math.nan, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        ('jaco2_sim', 'joint_offset_rad', [0.1]),
+    ]:
+        client = AsyncParameterClient(ros_node, node_name)
+        assert client.wait_for_services(10.0)
+        future = client.set_parameters([Parameter(name, value=value)])
+        assert ros_node.spin_until(future.done, 10.0)
+        result = future.result().results[0]
+        assert not result.successful, (name, value)
+        assert result.reason, (name, value)
+    assert sim.alive() and mp.alive()
