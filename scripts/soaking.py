@@ -28,11 +28,10 @@ from typing import Any
 from orchestration import NodeProcess, allocate_domain_id, start_node
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
-NODE_TESTS = (
+NODE_TESTS = (  # the node tests; tests/test_node_shutdown.py is what stop_rounds repeats
     'tests/test_sim_node.py',
     'tests/test_motion_planner_node.py',
     'tests/test_task_planner_node.py',
-    'tests/test_node_shutdown.py',
 )
 READY_S = 120.0  # longest wait for a node's 'ready' line on a loaded machine [s]
 STOP_S = 20.0  # longest wait for a node to exit after the signal, then SIGKILL [s]
@@ -162,6 +161,7 @@ def repeat_tests(
         ``runs``, ``passed`` (runs with every test green), ``failed_tests`` (node id → number
         of runs it failed in), ``run_seconds`` and ``exit_codes`` (one per run).
     """
+    work_dir.mkdir(parents=True, exist_ok=True)
     failures: Counter[str] = Counter()
     passed, seconds, exit_codes = 0, [], []
     for i in range(runs):
@@ -181,6 +181,42 @@ def repeat_tests(
         'failed_tests': dict(failures),
         'exit_codes': exit_codes,
         'run_seconds': seconds,
+    }
+
+
+def repeat_tests_parallel(
+    paths: list[str],
+    runs: int,
+    work_dir: Path,
+    sequences: int,
+    progress: Callable[[int, list[str]], Any] | None = None,
+) -> dict[str, Any]:
+    """:func:`repeat_tests` as ``sequences`` concurrent sequences sharing ``runs`` between them
+    (each sequence runs in a row; the runs load each other, like a second user of the machine).
+
+    Returns:
+        The keys of :func:`repeat_tests`, summed over the sequences, and ``sequences``.
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
+    shares = [runs // sequences + (k < runs % sequences) for k in range(sequences)]
+    with ThreadPoolExecutor(sequences) as pool:
+        parts = list(
+            pool.map(
+                lambda k: repeat_tests(paths, shares[k], work_dir / f'seq{k}', progress),
+                range(sequences),
+            )
+        )
+    failures: Counter[str] = Counter()
+    for part in parts:
+        failures.update(part['failed_tests'])
+    return {
+        'runs': sum(p['runs'] for p in parts),
+        'passed': sum(p['passed'] for p in parts),
+        'failed_tests': dict(failures),
+        'exit_codes': [c for p in parts for c in p['exit_codes']],
+        'run_seconds': [t for p in parts for t in p['run_seconds']],
+        'sequences': sequences,
     }
 
 

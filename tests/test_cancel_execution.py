@@ -30,7 +30,9 @@ def test_cancel_during_execution_stops_the_arm(launch: Any, ros_node: Any) -> No
 
     nodes = [
         launch('jaco2_sim', 'sim_node', parameters={'scenario': 's1', 'sim_rate_hz': 100.0}),
-        launch('stpik_motion_planner', 'motion_planner_node'),
+        # a generous planning limit: on the loaded shared machine 2 s planning TIMEOUTs (asked
+        # again, never learned as infeasible) could exhaust the back-off and abort the training
+        launch('stpik_motion_planner', 'motion_planner_node', parameters={'time_limit_s': 30.0}),
         launch('qtree_task_planner', 'task_planner_node', parameters={'execute_timeout_s': 240.0}),
     ]
     for node in nodes:
@@ -61,7 +63,9 @@ def test_cancel_during_execution_stops_the_arm(launch: Any, ros_node: Any) -> No
         recent = [q for t, q in states if t > time.monotonic() - 0.1]
         return len(recent) > 2 and float(np.max(np.abs(recent[-1] - recent[0]))) > 1e-3
 
-    assert ros_node.spin_until(moving, 400.0), 'the execution never started'
+    ros_node.spin_until(lambda: moving() or done.done(), 400.0)
+    assert not done.done(), f'the goal ended before executing: {done.result().result.message}'
+    assert moving(), 'the execution never started'
     ros_node.spin_until(lambda: False, 1.0)  # well inside the first relocation
     cancel = handle.cancel_goal_async()
     canceled_at = time.monotonic()
@@ -70,6 +74,9 @@ def test_cancel_during_execution_stops_the_arm(launch: Any, ros_node: Any) -> No
     q_stop = states[-1][1]
     ros_node.spin_until(lambda: False, 2.0)  # the arm must not move any more
     drift = float(np.max(np.abs(states[-1][1] - q_stop)))
+    moved = [t for (t, q), (_, p) in zip(states[1:], states[:-1], strict=False) if np.any(q != p)]
+    last_motion_s = max(0.0, max(moved, default=canceled_at) - canceled_at)
+    print(f'\n[cancel] last arm motion {last_motion_s:.3f} s after the cancel (bound 1 s)')
     assert drift < STILL_RAD, f'the arm still moved {drift:.4f} rad more than 1 s after cancel'
 
     assert ros_node.spin_until(done.done, 30.0), 'no result after the cancel'

@@ -106,3 +106,16 @@ def test_goal_defaults_are_the_papers() -> None:
     assert (goal.epsilon0, goal.epsilon_min, goal.max_episodes) == (1.0, 1e-4, 5000)
     assert not goal.execute and goal.feedback_every > 0 and goal.beta > 0
     assert math.isclose(AttachObject.Request().status_after_release, ObjectState.STATUS_RELOCATED)
+
+
+def test_strings_are_cut_at_a_nul_byte() -> None:
+    """Documented limit (#18, interface comments): the generated code ends a string at NUL."""
+    from rclpy.serialization import deserialize_message, serialize_message
+
+    request = RelocateObject.Request(object_id='O1\x00ghost', relocated_ids=['O2\x00O3'])
+    received = deserialize_message(serialize_message(request), RelocateObject.Request)
+    assert (received.object_id, list(received.relocated_ids)) == ('O1', ['O2'])
+    goal = deserialize_message(
+        serialize_message(RetrieveTarget.Goal(policy='H-EG\x00DQN')), RetrieveTarget.Goal
+    )
+    assert goal.policy == 'H-EG'

@@ -16,7 +16,9 @@ from qtree_node_support.lifecycle import run_node
 from qtree_node_support.qos import SERVICE_QOS
 from qtree_node_support.text import quote
 from qtree_scene.message import parse_scene_msg
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.exceptions import InvalidParameterValueException
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
@@ -48,13 +50,18 @@ class Jaco2SimNode(Node):
         self.scene_pub = self.create_publisher(Scene, '/scene', api.LATCHED_QOS)
         self.urdf_pub = self.create_publisher(String, '/robot_description', api.LATCHED_QOS)
         qos, on_raw = api.TRAJECTORY_QOS, self._on_raw_trajectory
-        self.create_subscription(JointTrajectory, '/joint_trajectory', on_raw, qos, raw=True)
-        self.create_subscription(JointState, p('command_topic'), self._on_command, qos)  # streamed
+        # motion on its own thread: services and parameters (scene loading) never stop it (#18)
+        self._motion = MutuallyExclusiveCallbackGroup()
+        group = {'callback_group': self._motion}
+        self.create_subscription(
+            JointTrajectory, '/joint_trajectory', on_raw, qos, raw=True, **group
+        )
+        self.create_subscription(JointState, p('command_topic'), self._on_command, qos, **group)
         for kind, name, cb in [(ResetScene, '~/reset_scene', self._on_reset),
                                (SetScene, '~/set_scene', self._on_set_scene),
                                (AttachObject, '~/attach_object', self._on_attach)]:  # fmt: skip
             self.create_service(kind, name, cb, qos_profile=SERVICE_QOS)
-        self.timer = self.create_timer(self.sim.period, self._on_timer)
+        self.timer = self.create_timer(self.sim.period, self._on_timer, self._motion)
         self.urdf_pub.publish(String(data=urdf_text()))
         self._publish_scene()
         rate = f'{1 / self.sim.period:g} Hz'
@@ -77,7 +84,7 @@ class Jaco2SimNode(Node):
                 self.timer.cancel()
                 self.destroy_timer(self.timer)
                 self.sim.period = 1.0 / p.value
-                self.timer = self.create_timer(self.sim.period, self._on_timer)
+                self.timer = self.create_timer(self.sim.period, self._on_timer, self._motion)
 
     def _change(self, action, *args) -> str:
         """Run a scene change of the core, publish the new scene; the change's message."""
@@ -98,7 +105,9 @@ class Jaco2SimNode(Node):
 
     def _publish_scene(self) -> None:
         now = self.get_clock().now()
-        self.scene_pub.publish(conv.scene_msg(self.core.world, now.to_msg()))
+        with self.core.lock:
+            msg = conv.scene_msg(self.core.world, now.to_msg())
+        self.scene_pub.publish(msg)
         self.core.scene_published(now.nanoseconds * 1e-9)
 
     def _on_raw_trajectory(self, raw: bytes) -> None:
@@ -138,7 +147,11 @@ class Jaco2SimNode(Node):
 def main(args: list[str] | None = None) -> None:
     """Run the node until SIGINT/SIGTERM (exit code 0); exit code 2 on bad start-up parameters."""
     startup = (Jaco2SimError, ModelError, ScenarioError, InvalidParameterValueException)
-    sys.exit(run_node(Jaco2SimNode, args=args, startup_errors=startup, name='jaco2_sim'))
+    executor = lambda context: MultiThreadedExecutor(2, context=context)  # noqa: E731
+    code = run_node(
+        Jaco2SimNode, args=args, make_executor=executor, startup_errors=startup, name='jaco2_sim'
+    )
+    sys.exit(code)
 
 
 if __name__ == '__main__':

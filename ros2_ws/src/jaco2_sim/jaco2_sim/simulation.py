@@ -19,6 +19,7 @@ Limits and failure behaviour:
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -77,6 +78,9 @@ class Simulation:
         self.fingers[:3] = self.robot.finger_angle
         self._scene_version = -1
         self._last_scene_s = 0.0
+        # The node steps on one thread and loads scenes on another (#18): parsing a file stays
+        # outside this lock, only the swap and the motion commands take it.
+        self.lock = threading.Lock()
 
     def check_parameter(self, name: str, value: Any, disturbances: dict[str, Any]) -> None:
         """Raise if ``value`` is not valid for parameter ``name`` (checked before it is set).
@@ -99,9 +103,10 @@ class Simulation:
     def install(self, scenario: Scenario) -> None:
         """Make ``scenario`` the scene and teleport home; on any exception nothing has changed."""
         world = World(scenario)
-        self.sim.reset(np.asarray(scenario.home))
-        self.drive.delay.clear()
-        self.scenario, self.world = scenario, world
+        with self.lock:
+            self.sim.reset(np.asarray(scenario.home))
+            self.drive.delay.clear()
+            self.scenario, self.world = scenario, world
 
     def load(self, name: str) -> None:
         """Load scenario ``name`` (installed name or YAML path) with :meth:`install`."""
@@ -127,7 +132,8 @@ class Simulation:
     def command_point(self, names: list[str], positions: list[float]) -> str:
         """Follow a streamed joint reference (closed-loop execution); '' or why it is rejected."""
         try:
-            self.drive.command('point', names, positions)
+            with self.lock:
+                self.drive.command('point', names, positions)
         except (Jaco2SimError, ValueError) as err:
             return str(err)
         return ''
@@ -142,10 +148,11 @@ class Simulation:
         Returns:
             (a trajectory ended, why delayed commands were rejected).
         """
-        errors = self.drive.apply_due()
-        finished = self.sim.step()
-        if self.world.attached_id is not None:
-            self.world.update(self.robot.ee_pose(self.sim.q))
+        with self.lock:
+            errors = self.drive.apply_due()
+            finished = self.sim.step()
+            if self.world.attached_id is not None:
+                self.world.update(self.robot.ee_pose(self.sim.q))
         return finished, errors
 
     def scene_due(self, now_s: float, rate_hz: float) -> bool:
@@ -168,11 +175,12 @@ class Simulation:
         Raises:
             Jaco2SimError, ModelError: a bad trajectory (the arm keeps its current motion).
         """
-        if len(times) == 0:
-            self.drive.delay.clear()
-            self.sim.cancel()
-            return '', 'empty trajectory: stopping'
-        clamped = self.drive.command('trajectory', names, times, positions, velocities)
+        with self.lock:
+            if len(times) == 0:
+                self.drive.delay.clear()
+                self.sim.cancel()
+                return '', 'empty trajectory: stopping'
+            clamped = self.drive.command('trajectory', names, times, positions, velocities)
         warning = 'trajectory beyond the joint limits: clamped to them' if clamped else ''
         return warning, f'following a trajectory of {len(times)} points'
 
@@ -185,10 +193,11 @@ class Simulation:
         Raises:
             WorldError: unknown or static object, another one held, not held, bad status.
         """
-        if attach:
-            return self.attach(object_id)
-        status = STATUS_NAMES.get(status_code, f'code {status_code}')
-        return self.release(object_id, status), ''
+        with self.lock:
+            if attach:
+                return self.attach(object_id)
+            status = STATUS_NAMES.get(status_code, f'code {status_code}')
+            return self.release(object_id, status), ''
 
     def attach(self, object_id: str) -> tuple[str, str]:
         """Grasp ``object_id`` where it is: (answer message, warning or '')."""

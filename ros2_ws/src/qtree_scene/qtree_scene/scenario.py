@@ -60,6 +60,7 @@ _OBJECT = {'id', 'role', 'shape', 'xy', 'radius', 'height', 'size', 'yaw'}
 _SHAPE_KEYS = {'cylinder': {'radius', 'height'}, 'box': {'size'}}
 _ROLES = ('target', 'obstacle', 'static')
 _MAX_SHOWN = 60  # characters of a bad value quoted in an error message
+MAX_SCENARIO_BYTES = 1_000_000  # largest scenario file (s3: 3 kB; 200 objects: ~40 kB) [bytes]
 MAX_NAME_CHARS = 256  # longest scenario name or object id (= the motion planner's id limit)
 _REPR = reprlib.Repr()
 _REPR.maxlevel, _REPR.maxstring, _REPR.maxother = 3, _MAX_SHOWN, _MAX_SHOWN
@@ -98,6 +99,13 @@ def load_scenario(name_or_path: str) -> Scenario:
         ScenarioError: unreadable file, bad YAML, or a schema / geometry violation.
     """
     path = resolve_scenario(name_or_path)
+    try:
+        size = path.stat().st_size
+    except OSError as err:
+        raise ScenarioError(str(path), '', f'cannot read YAML: {err}') from None
+    if size > MAX_SCENARIO_BYTES:  # parsing 1.4 MB took ~1 s: the sim must keep publishing
+        limit = f'{MAX_SCENARIO_BYTES / 1e6:g} MB'
+        raise ScenarioError(str(path), '', f'file of {size / 1e6:.1f} MB, over the {limit} limit')
     try:
         data = yaml.safe_load(path.read_text(encoding='utf-8'))
     except (OSError, ValueError, yaml.YAMLError) as err:  # ValueError: not UTF-8, bad date

@@ -168,6 +168,8 @@ class Execution(TrajectoryExecution):
             q_ref = np.array(self.q)
             timeout = node.get_parameter('execution_timeout_s').value
             for start, end, attach in segments(result):
+                if self._stopped:  # e.g. canceled while attaching (#18)
+                    return self._stopped
                 self._segment_end.clear()
                 with self._lock:
                     self._controller.begin(motion, start, end, q_ref)
@@ -238,6 +240,12 @@ class Execution(TrajectoryExecution):
         self._tracking_pub.publish(self._tracking_msg(tick, ''))
         if tick.phase == 'done':
             self._segment_end.set()
+
+    def _halt(self) -> None:
+        """Cancel (#18): also end a running closed loop, holding the measured position."""
+        super()._halt()
+        if self._controller is not None:
+            self._stop('execution canceled')
 
     def _stop(self, why: str) -> None:
         with self._lock:

@@ -136,11 +136,15 @@ class TrajectoryExecution:
         with self._stop_lock:
             running = self._running
             self._canceled.set()
-            self._trajectory_pub.publish(JointTrajectory(joint_names=list(ARM_JOINTS)))
+            self._halt()
         response.success = True
         response.message = 'execution canceled, arm stopped' if running else 'arm stopped'
         self._node.get_logger().info(f'cancel_execution: {response.message}')
         return response
+
+    def _halt(self) -> None:
+        """Stop the arm where it is: an empty /joint_trajectory (the sim holds its position)."""
+        self._trajectory_pub.publish(JointTrajectory(joint_names=list(ARM_JOINTS)))
 
     def _on_joint_states(self, msg: JointState) -> None:
         index = {n: i for i, n in enumerate(msg.name)}
