@@ -31,9 +31,10 @@ from qtree_task_planner.exceptions import (
 )
 from qtree_task_planner.goal import settings_from_goal
 from qtree_task_planner.messages import feedback_msg, movable_from_scene
+from qtree_task_planner.planners import make_trainer
 from qtree_task_planner.ros_oracle import RosPlannerOracle
 from qtree_task_planner.sequence_execution import CANCELED, FAILED, SequenceExecution
-from qtree_task_planner.training import STOP_CANCELLED, QTreeTrainer
+from qtree_task_planner.training import STOP_CANCELLED
 
 Result = RetrieveTarget.Result
 TIMEOUTS = {  # name: (default [s], description)
@@ -111,7 +112,7 @@ def run_goal(goal_handle: Any, ctx: GoalContext) -> tuple[int, str, Any, bool]:
     oracle = ctx.oracle = RosPlannerOracle(
         ctx.planner, ctx.param('planner_timeout_s'), ctx.param('scene_wait_s'), ctx.stopping
     )
-    trainer = QTreeTrainer(movable, target, oracle, settings.config)
+    trainer = make_trainer(movable, target, oracle, settings.config)
     every = settings.feedback_every
 
     def on_episode(stats) -> bool:
