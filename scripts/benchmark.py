@@ -19,6 +19,8 @@ Usage:
     python scripts/benchmark.py --trainings 5 --scenarios s1 --policies H-EG H-EG-SET --tag dev
     python scripts/benchmark.py --oracle synthetic    # synthetic tables (development only)
     python scripts/benchmark.py --ray auto            # on a Ray cluster (pip install ray)
+    python scripts/benchmark.py --from-json benchmarks/results/benchmark_sweep.json
+                                                      # Tables 1-3 from the sweep's default rows
     python scripts/benchmark_readme.py                # README table from the committed JSON
 """
 
@@ -32,6 +34,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from qtree_task_planner.benchmarking.derive import select
 from qtree_task_planner.benchmarking.paper import PAPER_POLICIES
 from qtree_task_planner.benchmarking.plots import plots, sweep_plot
 from qtree_task_planner.benchmarking.report import markdown, sweep_markdown
@@ -122,6 +125,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help='cap of one RND run [s] (besides Ep_max)',
     )
     parser.add_argument('--seed', type=int, default=0, help='seed of the first training')
+    parser.add_argument(
+        '--from-json',
+        type=Path,
+        metavar='JSON',
+        help='no training: write the tables of the selected rows from an earlier run '
+        '(e.g. the default Tables 1-3 from benchmark_sweep.json)',
+    )
     parser.add_argument('--out', type=Path, default=RESULTS)
     parser.add_argument(
         '--tag', default='', help='names the outputs benchmark_TAG.* and TAG_*.png'
@@ -193,6 +203,8 @@ def main(argv: list[str] | None = None) -> int:
     }
     if args.paper_sweep:
         meta['readings'] = {'sweep_windows': args.sweep_windows}
+    if args.from_json is not None:
+        return write_from_json(args, meta)
     warm, refs = {}, {}
     for name in args.scenarios:
         info, shared = reference(name, args.oracle)
@@ -216,6 +228,26 @@ def main(argv: list[str] | None = None) -> int:
         extra = sum(r['planner_runs_real'] for r in records if r['scenario'] == name)
         meta['scenarios'][name]['real_planner_runs'] = refs[name] + extra
     meta['wall_time_s'] = time.monotonic() - started
+    return write_outputs(args, meta, records)
+
+
+def write_from_json(args: argparse.Namespace, meta: dict) -> int:
+    """``--from-json``: the selected rows' records of an earlier run, written like a new run."""
+    try:
+        data = json.loads(args.from_json.read_text())
+        records, meta['scenarios'] = select(data, variants_of(args), args.scenarios)
+    except (OSError, ValueError, KeyError) as err:
+        print(f'benchmark.py: error: --from-json {args.from_json}: {err}', file=sys.stderr)
+        return 2
+    if data['meta'].get('trainings') != args.trainings:
+        print("benchmark.py: error: --trainings differs from the JSON's", file=sys.stderr)
+        return 2
+    meta['derived_from'] = str(args.from_json)
+    return write_outputs(args, meta, records)
+
+
+def write_outputs(args: argparse.Namespace, meta: dict, records: list[dict]) -> int:
+    """Write JSON + Markdown + PNG of a run and print the report; exit code 0."""
     rows = summarize(records)
     args.out.mkdir(parents=True, exist_ok=True)
     stem = f'benchmark_{args.tag}' if args.tag else 'benchmark'
@@ -229,7 +261,7 @@ def main(argv: list[str] | None = None) -> int:
     else:
         plots(rows, records, args.out, prefix)
     print(report)
-    print(f'wrote {args.out / stem}.json/.md and the plots ({meta["wall_time_s"]:.0f} s)')
+    print(f'wrote {args.out / stem}.json/.md and the plots')
     return 0
 
 

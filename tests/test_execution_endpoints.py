@@ -21,7 +21,8 @@ from trajectory_msgs.msg import JointTrajectory
 
 pytestmark = pytest.mark.timeout(240)
 
-ENDPOINTS = {
+ENDPOINTS = {  # a joint_trajectory_controller takes whole trajectories: open loop
+    'execution_mode': 'open_loop',
     'trajectory_topic': '/arm_controller/joint_trajectory',
     'joint_state_topic': '/arm/joint_states',
     'attach_service': '/gripper/attach',
@@ -39,9 +40,8 @@ class FakeArm:
         self.trajectories: list[JointTrajectory] = []
         self.grasps: list[tuple[str, bool]] = []
         self.states = node.create_publisher(JointState, ENDPOINTS['joint_state_topic'], 10)
-        node.create_subscription(
-            JointTrajectory, ENDPOINTS['trajectory_topic'], self._on_trajectory, 10
-        )
+        topic = ENDPOINTS['trajectory_topic']
+        node.create_subscription(JointTrajectory, topic, self._on_trajectory, 10)
         node.create_service(AttachObject, ENDPOINTS['attach_service'], self._on_attach)
         node.create_timer(0.02, self._publish)
         self._node = node

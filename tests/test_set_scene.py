@@ -121,6 +121,7 @@ def test_planner_takes_a_scene_from_any_publisher(launch: Any, ros_node: Any) ->
     assert rejected.reason == Reason.INVALID_SCENE and 'header.frame_id' in rejected.message
     assert 'planner rebuilt' not in planner.log_text()
     publisher.publish(scene_msg(load_scenario('s1')))
-    assert ros_node.spin_until(lambda: "scene 's1': planner rebuilt" in planner.log_text(), 20.0)
+    rebuilt = "scene 's1': planner rebuilt"
+    assert ros_node.spin_until(lambda: rebuilt in planner.log_text(), 20.0), planner.log_text()
     answer = ros_node.call(relocate, RelocateObject.Request(object_id='O2'), 60.0)
     assert answer.feasible, answer.message  # O2 is free on s1 (the planner's unit tests)

@@ -13,7 +13,6 @@ from builtin_interfaces.msg import Time
 from jaco2_description.model import ARM_JOINTS, FINGER_JOINTS
 from qtree_msgs.msg import Scene
 from qtree_scene import conversions as scene_conversions
-from qtree_scene.message import STATUS_CODES
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
@@ -21,7 +20,6 @@ from trajectory_msgs.msg import JointTrajectory
 from jaco2_sim.exceptions import TrajectoryError
 from jaco2_sim.world import World
 
-STATUS_NAMES = {code: name for name, code in STATUS_CODES.items()}
 MAX_SCANNED_NAMES = 256  # trajectory_size() stops counting points after this many joint names
 
 

@@ -92,13 +92,13 @@ def test_scenario_parameter_rejects_bad_files(node: Any, tmp_path: Path, case: s
 def test_unexpected_loader_exception_is_answered(
     node: Any, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from jaco2_sim import sim_node
+    from jaco2_sim import simulation
     from rclpy.parameter import Parameter
 
     def broken(name: str) -> None:
         raise RuntimeError(f'loader bug on {name}')
 
-    monkeypatch.setattr(sim_node, 'load_scenario', broken)
+    monkeypatch.setattr(simulation, 'load_scenario', broken)
     response = _reset(node, 's2')
     assert not response.success
     assert 'unexpected RuntimeError: loader bug on s2' in response.message

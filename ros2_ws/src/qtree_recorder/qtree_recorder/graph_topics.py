@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import math
 import platform
 import re
 from collections.abc import Sequence
@@ -15,7 +16,7 @@ from importlib import metadata as importlib_metadata
 from typing import Any
 
 from qtree_recorder.qos import QosProfileData
-from qtree_recorder.recording import DERIVED_TOPICS
+from qtree_recorder.recording import DEFAULT_TF_RATE_HZ, DERIVED_TOPICS
 
 # Hidden topics rosbag2 would skip but that carry the run's story: the action's feedback/status.
 ALLOWED_HIDDEN_SUFFIXES = ('/_action/feedback', '/_action/status')
@@ -133,3 +134,29 @@ def run_metadata_record(scenario: str, metadata: dict[str, Any], versions: dict[
         'versions': json.dumps(versions, sort_keys=True),
         'started_ns': str(started_ns),
     }
+
+
+def tf_rate_problem(value: Any) -> str:
+    """Why ``value`` is not a valid ``tf_rate_hz`` (a float >= 0 [Hz]), '' when it is."""
+    if isinstance(value, float) and math.isfinite(value) and value >= 0:
+        return ''
+    return f'tf_rate_hz must be a float >= 0, got {value}'
+
+
+def start_settings(p: dict[str, Any], error: Any) -> tuple[dict[str, Any], float, float]:
+    """``(run metadata, tf rate [Hz], discovery period [s])`` of the start-up parameters ``p``.
+
+    A bad value is logged through ``error`` and replaced: metadata stored as raw text, the
+    default /tf rate, a 0.5 s discovery period.
+    """
+    try:
+        metadata = parse_run_metadata(p['run_metadata'])
+    except ValueError as err:
+        error(f'{err}; stored as raw text')
+        metadata = {'raw': p['run_metadata']}
+    tf_rate = p['tf_rate_hz']
+    if tf_rate_problem(float(tf_rate)):
+        error(f'tf_rate_hz must be >= 0, got {tf_rate}; using {DEFAULT_TF_RATE_HZ}')
+        tf_rate = DEFAULT_TF_RATE_HZ
+    period = p['discovery_period_s'] if p['discovery_period_s'] > 0 else 0.5
+    return metadata, tf_rate, period

@@ -303,11 +303,12 @@ def save_png(drawing: TreeDrawing, path: Path | str, *, title: str = 'Q-tree') -
         Line2D([], [], color=STYLE[KIND_TARGET][0], lw=1.8, label='target relocated (r = 100)'),
         Line2D([], [], color=HIGHLIGHT, lw=6, alpha=0.45, label='extracted sequence (eq. 19)'),
     ]
-    fig.legend(handles=legend, loc='lower right', ncol=4, fontsize=7, frameon=False)
     ax.set_title(title, fontsize=10)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    fig.legend(handles=legend, loc='lower center', bbox_to_anchor=(0.5, 0.03), ncol=4,
+               fontsize=7, frameon=False)  # fmt: skip
     note = drawing.note() or f'all {drawing.total_nodes} nodes and {drawing.total_edges} edges'
-    fig.text(0.01, 0.012, note, fontsize=7, ha='left', va='bottom', wrap=True)
-    fig.tight_layout(rect=(0, 0.06, 1, 1))
+    fig.text(0.01, 0.008, note, fontsize=7, ha='left', va='bottom', wrap=True)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=130)
     plt.close(fig)

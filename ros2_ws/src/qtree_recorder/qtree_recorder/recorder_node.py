@@ -9,22 +9,15 @@ Rerun view. SIGINT finishes the file (summary + ``rosbag2`` record) and exits 0.
 
 from __future__ import annotations
 
-import math
-import queue
 import sys
-import threading
 import time
 from datetime import datetime
 from pathlib import Path
 
-from qtree_msgs.msg import Scene
 from qtree_node_support.lifecycle import run_node
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.serialization import deserialize_message
-from sensor_msgs.msg import JointState
-from std_msgs.msg import String
 
 from qtree_recorder import graph_topics
 from qtree_recorder.exceptions import RecorderError
@@ -32,9 +25,9 @@ from qtree_recorder.mcap_log import McapLog
 from qtree_recorder.qos import QosProfileData
 from qtree_recorder.recording import DEFAULT_TF_RATE_HZ, Recording
 from qtree_recorder.rerun_feed import RerunFeed
+from qtree_recorder.writer import RecordWriter
 
 SUBSCRIPTION_DEPTH = 1000  # [messages] queue per recorded topic: a training bursts episodes
-IDLE_WAIT_S = 0.2  # [s] worker wake-up period when no message arrives
 
 
 # (name, default, description, read-only: only read at start)
@@ -67,16 +60,7 @@ class RecorderNode(Node):
         p = {name: self.get_parameter(name).value for name, *_ in PARAMETERS}
         self.add_on_set_parameters_callback(self._on_set_parameters)
         log = self.get_logger()
-        try:
-            metadata = graph_topics.parse_run_metadata(p['run_metadata'])
-        except ValueError as err:
-            log.error(f'{err}; stored as raw text')
-            metadata = {'raw': p['run_metadata']}
-        tf_rate = p['tf_rate_hz']
-        if not (math.isfinite(tf_rate) and tf_rate >= 0):
-            log.error(f'tf_rate_hz must be >= 0, got {tf_rate}; using {DEFAULT_TF_RATE_HZ}')
-            tf_rate = DEFAULT_TF_RATE_HZ
-        period = p['discovery_period_s'] if p['discovery_period_s'] > 0 else 0.5
+        metadata, tf_rate, period = graph_topics.start_settings(p, log.error)
         name = p['file_name'] or graph_topics.default_file_name(p['scenario'], datetime.now())
         self.path = Path(p['output_dir']).expanduser() / name
         self._custom = {'scenario': p['scenario'], 'run_metadata': p['run_metadata']}
@@ -91,11 +75,8 @@ class RecorderNode(Node):
             log.error(f'not recording: {err}')
         rrd = p['rrd_path'] or str(self.path.with_suffix('.rrd'))
         self.rerun = RerunFeed(p['rerun_mode'], rrd, log.error)
-        self._queue: queue.Queue = queue.Queue()
+        self.writer = RecordWriter(self.recording, self.rerun, log.error)
         self._recorded: dict[str, object] = {}
-        self._errors = 0
-        self._worker = threading.Thread(target=self._work, name='mcap_writer', daemon=True)
-        self._worker.start()
         self._discover()
         self._timer = self.create_timer(period, self._discover)
         if self.recording is not None:
@@ -105,13 +86,10 @@ class RecorderNode(Node):
     def _on_set_parameters(self, params: list) -> SetParametersResult:
         for param in params:
             if param.name == 'tf_rate_hz':
-                value = param.value
-                if not isinstance(value, float) or not math.isfinite(value) or value < 0:
-                    return SetParametersResult(
-                        successful=False, reason=f'tf_rate_hz must be a float >= 0, got {value}'
-                    )
+                if problem := graph_topics.tf_rate_problem(param.value):
+                    return SetParametersResult(successful=False, reason=problem)
                 if self.recording is not None:
-                    self.recording.set_tf_rate(value)
+                    self.recording.set_tf_rate(param.value)
         return SetParametersResult(successful=True)
 
     def _discover(self) -> None:
@@ -138,71 +116,24 @@ class RecorderNode(Node):
                 durability=DurabilityPolicy[durability.upper()])  # fmt: skip
 
             def callback(raw: bytes, t=topic, n=type_name, o=offers, h=type_hash) -> None:
-                self._queue.put((t, n, raw, time.time_ns(), o, h))
+                self.writer.put(t, n, raw, time.time_ns(), o, h)
 
             self._recorded[topic] = self.create_subscription(
                 msg_class, topic, callback, qos, raw=True)  # fmt: skip
             self.get_logger().info(f'recording {topic} [{type_name}] {reliability} {durability}')
 
-    def _work(self) -> None:
-        while True:
-            try:
-                item = self._queue.get(timeout=IDLE_WAIT_S)
-            except queue.Empty:
-                self._guard(lambda: self.recording and self.recording.tick())
-                continue
-            if item is None:
-                return
-            self._guard(lambda item=item: self._process(*item))
-
-    def _guard(self, action) -> None:
-        try:
-            action()
-        except Exception as err:  # a bad message or a full disk must never stop the writer
-            self._errors += 1
-            if self._errors <= 5 or self._errors % 1000 == 0:  # throttled
-                kind = '' if isinstance(err, RecorderError) else f'{type(err).__name__}: '
-                self.get_logger().error(f'recording error #{self._errors}: {kind}{err}')
-
-    def _process(self, topic, type_name, raw, t_ns, offers, type_hash) -> None:
-        rec = self.recording
-        if rec is not None:
-            rec.record(topic, type_name, raw, t_ns, offers, type_hash)
-        if type_name == 'sensor_msgs/msg/JointState':
-            msg = deserialize_message(raw, JointState)
-            if rec is not None:
-                rec.on_joint_state(msg.name, msg.position, t_ns)
-        elif topic == '/robot_description' and type_name == 'std_msgs/msg/String':
-            msg = deserialize_message(raw, String)
-            if rec is not None:
-                rec.on_robot_description(msg.data, t_ns)
-        elif type_name == 'qtree_msgs/msg/Scene':
-            msg = deserialize_message(raw, Scene)
-            if rec is not None:
-                rec.on_scene(msg, t_ns)
-        else:
-            self.rerun.on_raw(topic, type_name, raw, t_ns)
-            return
-        self.rerun.on_decoded(topic, msg, t_ns)
-
-    def _say(self, text: str, error: bool = False) -> None:
-        """Log through rclpy while the context lives, else to stderr (after SIGINT)."""
-        if self.context.ok():
-            (self.get_logger().error if error else self.get_logger().info)(text)
-        else:
-            print(f'[{"ERROR" if error else "INFO"}] [recorder]: {text}', file=sys.stderr)
-
     def finish(self) -> None:
-        """Stop the worker after it wrote everything queued, then finish the file."""
-        self._queue.put(None)
-        self._worker.join(timeout=30.0)
-        if self.recording is not None:
-            try:
-                stats = self.recording.close(self._custom)
-                self._say(f'recording finished: {stats.message_count} messages in {self.path}')
-            except RecorderError as err:
-                self._say(f'{err} (data up to the last chunk stays readable)', error=True)
-        self.rerun.close()
+        """Stop the writer after it wrote everything queued, then finish the file."""
+        line, failed = self.writer.finish(self._custom, self.path)
+        if not line:
+            return
+        if self.context.ok():  # log through rclpy while the context lives, else to stderr
+            if failed:
+                self.get_logger().error(line)
+            else:
+                self.get_logger().info(line)
+        else:
+            print(f'[{"ERROR" if failed else "INFO"}] [recorder]: {line}', file=sys.stderr)
 
 
 def main(args: list[str] | None = None) -> None:

@@ -101,3 +101,17 @@ def test_tf_mean_rate_follows_tf_rate_hz(tmp_path: Path) -> None:
     written = sum(rec.on_joint_state(ARM, [3.0] * 7, T0 + i * period_ns) for i in range(189))
     assert written == pytest.approx(60, abs=1)  # 2.0 s at 30 Hz
     rec.close()
+
+
+def test_start_settings_replace_bad_values() -> None:
+    from qtree_recorder.graph_topics import start_settings, tf_rate_problem
+    from qtree_recorder.recording import DEFAULT_TF_RATE_HZ
+
+    errors: list[str] = []
+    p = {'run_metadata': '{not json', 'tf_rate_hz': -1.0, 'discovery_period_s': 0.0}
+    metadata, tf_rate, period = start_settings(p, errors.append)
+    assert metadata == {'raw': '{not json'} and tf_rate == DEFAULT_TF_RATE_HZ and period == 0.5
+    assert len(errors) == 2 and 'tf_rate_hz must be >= 0' in errors[1]
+    good = {'run_metadata': '{"seed": 3}', 'tf_rate_hz': 5.0, 'discovery_period_s': 0.2}
+    assert start_settings(good, errors.append) == ({'seed': 3}, 5.0, 0.2) and len(errors) == 2
+    assert tf_rate_problem(2) and tf_rate_problem(float('nan')) and not tf_rate_problem(0.0)

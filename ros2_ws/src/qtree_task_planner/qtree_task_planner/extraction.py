@@ -95,33 +95,18 @@ def path_of(tree: QTree, sequence: tuple[str, ...]) -> list[Edge]:
 def best_known_sequence(tree: QTree) -> tuple[str, ...]:
     """Eq. (19) on the steady-state values of what the tree knows, without modifying it.
 
-    Computes, deepest node first, V(s) = max_a [r + gamma V(s')] over the explored edges (the
-    values :meth:`QTree.sweep` would write, optimism ignored), then walks greedily from the root.
+    Follows, from the root, the edge maximising r + gamma V(s') with V(s) = max_a [r + gamma V(s')]
+    over the explored edges (the values :meth:`QTree.sweep` would write, optimism ignored; ties to
+    the earliest-created edge). The tree keeps these values up to date as edges are added
+    (:meth:`QTree.known_choice`), so this is O(depth), not a sort of every node per episode.
     Used for the per-episode best sequence of H-EG-SET, whose Q values are optimistic.
 
     Returns:
         The best explored sequence ending with a feasible target edge, or ``()``.
     """
-    gamma = tree.gamma
-    value: dict[NodeKey, float] = {}
-    choice: dict[NodeKey, Edge] = {}
-    for node in sorted(tree.nodes(), key=lambda n: n.depth, reverse=True):
-        best: Edge | None = None
-        best_value = 0.0
-        for edge in node.children.values():
-            if edge.feasible and edge.action != tree.target_id:
-                q = edge.reward + gamma * value.get(edge.child, 0.0)
-            else:
-                q = edge.reward
-            if best is None or q > best_value:
-                best, best_value = edge, q
-        value[node.key] = best_value
-        if best is not None:
-            choice[node.key] = best
     sequence: list[str] = []
     key: NodeKey = ()
-    while key in choice:
-        edge = choice[key]
+    while (edge := tree.known_choice(key)) is not None:
         sequence.append(edge.action)
         if edge.action == tree.target_id:
             return tuple(sequence) if edge.feasible else ()

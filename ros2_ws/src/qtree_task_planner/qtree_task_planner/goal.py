@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from qtree_task_planner.exceptions import InvalidParameterError
-from qtree_task_planner.policies import canonical_policy_name
+from qtree_task_planner.planners import canonical_planner_name
 from qtree_task_planner.training import TrainingConfig
 
 FLOAT_FIELDS = ('alpha', 'gamma', 'epsilon0', 'epsilon_min', 'beta')  # every float64 goal field
@@ -46,7 +46,7 @@ def settings_from_goal(goal: Any) -> GoalSettings:
     Raises:
         InvalidParameterError: the first invalid field (the message names it).
     """
-    policy = canonical_policy_name(str(goal.policy))
+    policy = canonical_planner_name(str(goal.policy))
     for name in FLOAT_FIELDS:  # NaN and inf pass some range checks (inf > 0): reject them first
         value = float(getattr(goal, name))
         if not math.isfinite(value):

@@ -9,14 +9,47 @@ The Q-Tree only needs a binary answer (Sect. 3.2). Implementations:
 * The ROS client oracle (RelocateObject service) lives in ``task_planner_node``.
 
 ``planner_runs`` counts real planner runs (cache misses); ``queries`` counts every call.
+
+Blocker extension (issue #14): an oracle may also implement ``answer(relocated, object_id)``,
+returning a :class:`FeasibilityAnswer` ``(feasible, blocking_ids)``; :func:`ask` falls back to
+``feasible()`` with ``blocking_ids=None`` (no report) for oracles that do not. For an infeasible
+answer ``blocking_ids`` is a tuple of movable ids believed to stand in the way (``()``: blocked
+by nothing movable, relocating others cannot help); ``None`` means no report (timeouts, planners
+without blockers). ``sound_blockers`` on an oracle declares its reports SOUND: every set of objects
+whose removal would make the object feasible contains at least one reported blocker (with
+monotone feasibility: the object stays infeasible when every movable object except the reported
+ones is removed). :class:`TableOracle` reports are sound; the planner's are not guaranteed, and
+:mod:`qtree_task_planner.blocker_search` verifies them.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 SetKey = tuple[frozenset[str], str]
+
+
+class FeasibilityAnswer(NamedTuple):
+    """One answer with its blockers (unpacks as ``feasible, blocking_ids``).
+
+    Attributes:
+        feasible: the object can be relocated.
+        blocking_ids: infeasible answers: movable ids in the way (``()``: nothing movable can
+            help), or None when the oracle gave no report; ``()`` when feasible.
+    """
+
+    feasible: bool
+    blocking_ids: tuple[str, ...] | None = None
+
+
+def ask(oracle: Any, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
+    """``oracle.answer(...)`` if the oracle reports blockers, else ``feasible()`` and no report."""
+    answer = getattr(oracle, 'answer', None)
+    if answer is not None:
+        return answer(tuple(relocated), object_id)
+    feasible = bool(oracle.feasible(tuple(relocated), object_id))
+    return FeasibilityAnswer(feasible, () if feasible else None)
 
 
 @runtime_checkable
@@ -50,23 +83,44 @@ class TableOracle:
         O3 gone; O1 needs O3 gone.
     """
 
-    def __init__(self, requirements: Mapping[str, Sequence[Iterable[str]]]) -> None:
+    def __init__(
+        self, requirements: Mapping[str, Sequence[Iterable[str]]], *, report: str = 'union'
+    ) -> None:
+        if report not in ('union', 'fewest', 'none'):
+            raise ValueError(f"report must be 'union', 'fewest' or 'none', got {report!r}")
         self.requirements = {o: [frozenset(s) for s in sets] for o, sets in requirements.items()}
+        self.report = report
+        self.sound_blockers = report == 'union'
         self.planner_runs = 0
         self.queries = 0
         self._seen: set[SetKey] = set()
 
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """True if some clearing set of ``object_id`` is contained in ``relocated``."""
+        return self.answer(relocated, object_id).feasible
+
+    def answer(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
+        """Feasibility and blockers: with ``report='union'`` (sound and complete) the objects of
+        every clearing set not yet relocated; ``'fewest'`` only those of the clearing set with
+        the fewest left (like the planner's "most promising approach", not sound); ``'none'``
+        no report."""
         self.queries += 1
         key = (frozenset(relocated), object_id)
         if key not in self._seen:
             self._seen.add(key)
             self.planner_runs += 1
         if object_id not in self.requirements:
-            return True
+            return FeasibilityAnswer(True, ())
         done = key[0]
-        return any(need <= done for need in self.requirements[object_id])
+        needs = self.requirements[object_id]
+        if any(need <= done for need in needs):
+            return FeasibilityAnswer(True, ())
+        if self.report == 'none':
+            return FeasibilityAnswer(False, None)
+        left = [sorted(need - done) for need in needs]
+        if self.report == 'fewest':
+            return FeasibilityAnswer(False, tuple(min(left, key=len)) if left else ())
+        return FeasibilityAnswer(False, tuple(sorted({o for need in left for o in need})))
 
 
 class MemoOracle:
@@ -87,6 +141,8 @@ class MemoOracle:
         self.planner_runs = 0
         self.queries = 0
         self.results: dict[SetKey, bool] = {}
+        self.answers: dict[SetKey, FeasibilityAnswer] = {}
+        self.sound_blockers = bool(getattr(inner, 'sound_blockers', False))
 
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """Answer from the memo, or ask ``inner`` once."""
@@ -96,6 +152,19 @@ class MemoOracle:
             self.results[key] = bool(self.inner.feasible(tuple(relocated), object_id))
             self.planner_runs += 1
         return self.results[key]
+
+    def answer(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
+        """Answer with blockers from the memo, or ask ``inner`` once (see :func:`ask`)."""
+        self.queries += 1
+        key = (frozenset(relocated), object_id)
+        if key not in self.answers:
+            if self.results.get(key):
+                self.answers[key] = FeasibilityAnswer(True, ())
+            else:
+                self.answers[key] = ask(self.inner, tuple(relocated), object_id)
+                self.planner_runs += key not in self.results
+                self.results[key] = self.answers[key].feasible
+        return self.answers[key]
 
 
 class MotionPlannerOracle:
@@ -127,9 +196,62 @@ class MotionPlannerOracle:
 
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """Ask the planner (``check(object_id, relocated_ids)``) and count real runs."""
+        return self.answer(relocated, object_id).feasible
+
+    def answer(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
+        """Ask the planner; blockers from the result's ``blocking_ids`` (issue #14, item 3).
+
+        ``blocked_by_immovable`` gives ``()``; a result without blockers (a time-out, or a
+        planner that names none) gives None: no report.
+        """
         self.queries += 1
         result = self.planner.check(object_id, list(relocated))
         if not getattr(result, 'from_cache', False):
             self.planner_runs += 1
             self.planning_time_s += float(getattr(result, 'planning_time', 0.0) or 0.0)
-        return bool(result.feasible)
+        if result.feasible:
+            return FeasibilityAnswer(True, ())
+        union = self._all_approach_blockers(relocated, object_id)
+        if union is not None and not getattr(result, 'blocked_by_immovable', False):
+            return FeasibilityAnswer(False, union)
+        return FeasibilityAnswer(False, blockers_of(result, relocated, object_id))
+
+    def _all_approach_blockers(
+        self, relocated: tuple[str, ...], object_id: str
+    ) -> tuple[str, ...] | None:
+        """Union over the planner's working approaches of their blockers, or None.
+
+        The response field names only the most promising approach's blockers, which need not
+        hit every approach; in process the planner's per-approach sweeps
+        (``planner.blockers.sweeps``, issue #14 item 3) give the blockers of every approach, a
+        report that is sound whenever the sweeps are. None when the planner has no sweeps.
+        """
+        finder = getattr(self.planner, 'blockers', None)
+        sweeps = getattr(finder, 'sweeps', {}).get(object_id) if finder is not None else None
+        if not sweeps:
+            return None
+        from stpik_motion_planner import blockers as module  # lazy: heavy imports
+
+        done = frozenset(relocated) | {object_id}
+        ids: set[str] = set()
+        for sweep in sweeps:
+            if sweep.works:
+                ids.update(sweep.blockers(done, module.HIT_MARGIN_M))
+        return tuple(sorted(ids)) or None
+
+
+def blockers_of(result: Any, relocated: Sequence[str], object_id: str) -> tuple[str, ...] | None:
+    """The blocker report of an infeasible planner result or RelocateObject response.
+
+    Reads ``blocking_ids`` and ``blocked_by_immovable`` (absent fields: no report); drops ids
+    already relocated and the object itself.
+
+    Returns:
+        ``()`` when blocked by nothing movable, the ids, or None when nothing was reported.
+    """
+    if getattr(result, 'blocked_by_immovable', False):
+        return ()
+    ids = tuple(getattr(result, 'blocking_ids', ()) or ())
+    done = set(relocated) | {object_id}
+    ids = tuple(i for i in ids if i not in done)
+    return ids or None

@@ -16,6 +16,7 @@ import rclpy
 from qtree_msgs.srv import RelocateObject
 
 from qtree_task_planner.exceptions import OracleUnavailableError
+from qtree_task_planner.oracle import FeasibilityAnswer, blockers_of
 from qtree_task_planner.retry import Backoff
 
 
@@ -94,6 +95,18 @@ class RosPlannerOracle:
         Raises:
             OracleUnavailableError: no answer after the retries, or the request was rejected.
         """
+        return self.answer(relocated, object_id).feasible
+
+    def answer(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
+        """Like :meth:`feasible`, with the response's blockers (``blocking_ids``, issue #14).
+
+        Planning failures (2xx) carry the response's ``blocking_ids`` (``()`` when
+        ``blocked_by_immovable``; None when it names nobody or the field is absent); time-outs
+        (3xx) carry no report (None).
+
+        Raises:
+            OracleUnavailableError: no answer in time, or the request was rejected.
+        """
         request = RelocateObject.Request(
             object_id=object_id, relocated_ids=list(relocated), execute=False
         )
@@ -129,4 +142,8 @@ class RosPlannerOracle:
             detail = f'request rejected (reason {response.reason}): {response.message}'
             raise OracleUnavailableError(object_id, relocated, detail)
         self.planner_runs += not response.from_cache
-        return bool(response.feasible)
+        if response.feasible:
+            return FeasibilityAnswer(True, ())
+        if response.reason >= 300:  # a time-out says nothing about who blocks
+            return FeasibilityAnswer(False, None)
+        return FeasibilityAnswer(False, blockers_of(response, relocated, object_id))

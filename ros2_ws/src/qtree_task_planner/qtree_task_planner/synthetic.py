@@ -75,3 +75,100 @@ def synthetic_scenario(name: str) -> tuple[tuple[str, ...], dict[str, list[set[s
     """
     n_obstacles, seed = SYNTHETIC_SCENARIOS[name]
     return random_requirements(n_obstacles, np.random.default_rng(seed), p_blocked=0.6)
+
+
+def decoy_requirements(
+    n_chain: int, n_decoys: int
+) -> tuple[tuple[str, ...], dict[str, list[set[str]]]]:
+    """An abstract decoy scene: a blocking chain plus free, useless decoys.
+
+    T needs ``C1`` gone, ``C1`` needs ``C2`` gone, …, ``C{n_chain}`` is free; the decoys
+    ``D1``… are always feasible and never help. The unique optimum relocates the chain from its
+    far end, level ``n_chain + 1``; the decoys only widen the search (the issue #14 profile).
+
+    Args:
+        n_chain: chain length >= 0.
+        n_decoys: number of decoys >= 0.
+
+    Returns:
+        (obstacle ids, chain first then decoys; requirements for :class:`TableOracle`).
+    """
+    if n_chain < 0 or n_decoys < 0:
+        raise ValueError(f'n_chain and n_decoys must be >= 0, got {n_chain}, {n_decoys}')
+    chain = [f'C{i + 1}' for i in range(n_chain)]
+    decoys = [f'D{i + 1}' for i in range(n_decoys)]
+    requirements: dict[str, list[set[str]]] = {}
+    for blocked, blocker in zip(['T', *chain], chain, strict=False):
+        requirements[blocked] = [{blocker}]
+    return (*chain, *decoys), requirements
+
+
+APPROACH_OFFSETS_RAD = (-0.6, -0.3, 0.0, 0.3, 0.6)  # side-grasp approach yaws about the bearing
+REACH_M = 0.85  # farther objects cannot be grasped at all (blocked by nothing movable) [m]
+
+
+def corridor_requirements(
+    n_obstacles: int, density: float, seed: int, *, radius: float = 0.03, hand: float = 0.09
+) -> tuple[tuple[str, ...], dict[str, list[set[str]]]]:
+    """An abstract clutter scene with blocker sets, shaped like a tabletop (development only).
+
+    ``n_obstacles + 1`` discs of radius ``radius`` [m] are placed without overlap in a rectangle
+    in front of the base (x >= 0.35 m, width 1.75 x depth, area set by ``density`` = footprint /
+    area). An object is grasped along one of five approach directions around its bearing from
+    the base; an approach's clearing set is every disc whose centre lies in the corridor swept by
+    the hand (width ``hand`` + 2 radius [m]) from the object back towards the base side, up to
+    the region's near edge. Objects beyond :data:`REACH_M` have no approach. The target ``T``
+    is the disc nearest the region's centre; the obstacles are ``O1``… by distance to the base.
+
+    Returns:
+        (obstacle ids, requirements for :class:`TableOracle`; the target is ``'T'``).
+
+    Raises:
+        ValueError: ``n_obstacles < 0``, density outside (0, 0.5], or the discs do not fit.
+    """
+    if n_obstacles < 0 or not 0.0 < density <= 0.5:
+        raise ValueError(
+            f'need n_obstacles >= 0 and density in (0, 0.5], got {n_obstacles}, {density}'
+        )
+    rng = np.random.default_rng(seed)
+    n = n_obstacles + 1
+    depth = float(np.sqrt(n * np.pi * radius**2 / density / 1.75))
+    width = 1.75 * depth
+    centres: list[np.ndarray] = []
+    for _ in range(n):
+        for _ in range(5000):
+            c = np.array(
+                [
+                    rng.uniform(0.35 + radius, 0.35 + depth - radius),
+                    rng.uniform(-width / 2 + radius, width / 2 - radius),
+                ]
+            )
+            if all(np.hypot(*(c - o)) > 2 * radius + 0.005 for o in centres):
+                centres.append(c)
+                break
+        else:
+            raise ValueError(f'cannot place {n} discs at density {density}')
+    middle = np.array([0.35 + depth / 2, 0.0])
+    target = int(np.argmin([np.hypot(*(c - middle)) for c in centres]))
+    others = sorted((i for i in range(n) if i != target), key=lambda i: np.hypot(*centres[i]))
+    names = {target: 'T', **{i: f'O{k + 1}' for k, i in enumerate(others)}}
+    half = hand / 2 + radius
+    requirements: dict[str, list[set[str]]] = {}
+    for i, c in enumerate(centres):
+        if np.hypot(*c) > REACH_M:
+            requirements[names[i]] = []
+            continue
+        bearing = float(np.arctan2(c[1], c[0]))
+        sets = []
+        for offset in APPROACH_OFFSETS_RAD:
+            u = -np.array([np.cos(bearing + offset), np.sin(bearing + offset)])  # towards the arm
+            blocking = set()
+            for j, d in enumerate(centres):
+                along = float(np.dot(d - c, u))
+                across = abs(float(np.cross(u, d - c)))
+                if j != i and along > 0.0 and across < half + radius:
+                    blocking.add(names[j])
+            sets.append(blocking)
+        if not any(not s for s in sets):
+            requirements[names[i]] = sets
+    return tuple(f'O{k + 1}' for k in range(n_obstacles)), requirements

@@ -23,6 +23,13 @@ feasible node of the same set: their key is the parent's key plus ``'!' + action
 Optimism (``optimistic_over``, also H-EG-SET): untried actions count with an upper bound of their
 value in eq. (5) and in the greedy choice, and a new obstacle edge starts at that bound instead of
 its reward (:meth:`QTree.value`).
+
+Bookkeeping (issue #14, results unchanged): the optimistic V(s) of :meth:`QTree.value` is memoised
+and a memo entry is dropped when anything it was computed from changes (an edge of the node is
+added or updated, or a child set it valued optimistically gains edges or appears); the explored
+steady-state value and best edge of every node (what :func:`~qtree_task_planner.extraction.
+best_known_sequence` reads) are kept up to date edge by edge instead of re-sorting every node after
+every episode.
 """
 
 from __future__ import annotations
@@ -109,6 +116,10 @@ class QTree:
         self._nodes: dict[NodeKey, TreeNode] = {(): self.root}
         self._num_edges = 0
         self._q_bar = 0.0  # eq. (10), kept up to date edge by edge
+        self._memo: dict[NodeKey, float] = {}  # optimistic V(s), see :meth:`value`
+        # explored steady-state value and best edge of each node (see :meth:`known_choice`)
+        self._known: dict[NodeKey, tuple[float, Edge | None]] = {(): (0.0, None)}
+        self._in_edges: dict[NodeKey, list[Edge]] = {}  # feasible obstacle edges into a node
 
     # -- look-up ---------------------------------------------------------------------------------
 
@@ -162,16 +173,25 @@ class QTree:
         Without optimism this is :meth:`max_q`. With ``optimistic_over`` (H-EG-SET), actions not
         yet tried from a non-terminal node count with their best possible value, an upper bound of
         what they can bring (optimism in the face of uncertainty): r_T for an untried target,
-        gamma r_T for an untried obstacle (relocate it, then the target).
+        gamma r_T for an untried obstacle (relocate it, then the target). Memoised; the memo is
+        invalidated by every change it depends on (:meth:`_invalidate`), so the value is the
+        same float as a fresh recursion.
         """
+        if self.optimistic_over is None:
+            return self.max_q(key)
+        memo = self._memo.get(key)
+        if memo is not None:
+            return memo
         node = self._nodes[key]
         best = max((edge.q for edge in node.children.values()), default=None)
-        if self.optimistic_over is not None and not node.terminal:
+        if not node.terminal:
             for action in self.optimistic_over:
                 if action not in node.children and action not in node.sequence:
                     bound = self.untried_value(key, action)
                     best = bound if best is None else max(best, bound)
-        return 0.0 if best is None else best
+        value = 0.0 if best is None else best
+        self._memo[key] = value
+        return value
 
     def untried_value(self, key: NodeKey, action: str) -> float:
         """Value given to an action not yet tried from node ``key`` by the greedy choice.
@@ -187,6 +207,53 @@ class QTree:
         if child in self._nodes:
             return self.gamma * self.value(child)
         return self.gamma * REWARD_TARGET
+
+    def _invalidate(self, key: NodeKey) -> None:
+        """Drop the memoised V of ``key`` and of every node whose memo was computed from it.
+
+        A node may read V(key) through an untried action: its key is ``key`` minus one id (an
+        over-approximation, which only costs a recomputation). A node whose memo is absent has no
+        memoised dependent (computing a value memoises what it read), so the walk stops there.
+        """
+        stack = [key]
+        while stack:
+            k = stack.pop()
+            if self._memo.pop(k, None) is None:
+                continue
+            stack.extend(self._untried_parents(k))
+
+    def _untried_parents(self, key: NodeKey) -> list[NodeKey]:
+        """Existing nodes whose key is ``key`` without one of its ids."""
+        parents = (key[:i] + key[i + 1 :] for i in range(len(key)))
+        return [p for p in parents if p in self._nodes]
+
+    def known_value(self, key: NodeKey) -> float:
+        """Explored steady-state value of a node: max over its edges of r + gamma V(child) (the
+        reward alone for the target and failed edges), 0 without edges; optimism ignored."""
+        return self._known[key][0]
+
+    def known_choice(self, key: NodeKey) -> Edge | None:
+        """The earliest-created edge reaching :meth:`known_value`, None without edges."""
+        return self._known[key][1]
+
+    def _refresh_known(self, key: NodeKey) -> None:
+        """Recompute :meth:`known_value` of ``key`` and propagate a change to its parents."""
+        stack = [key]
+        while stack:
+            k = stack.pop()
+            best: Edge | None = None
+            best_value = 0.0
+            for edge in self._nodes[k].children.values():
+                if edge.feasible and edge.action != self.target_id:
+                    q = edge.reward + self.gamma * self._known[edge.child][0]
+                else:
+                    q = edge.reward
+                if best is None or q > best_value:
+                    best, best_value = edge, q
+            changed = best_value != self._known[k][0]
+            self._known[k] = (best_value, best)
+            if changed:
+                stack.extend(edge.parent for edge in self._in_edges.get(k, ()))
 
     def failed_actions(self, key: NodeKey) -> set[str]:
         """Actions already tried unsuccessfully from this node (reward -1)."""
@@ -226,6 +293,9 @@ class QTree:
         if created:
             terminal = (not feasible) or action == self.target_id
             self._nodes[child_key] = TreeNode(child_key, sequence, len(sequence), terminal)
+            self._known[child_key] = (0.0, None)
+            for key in self._untried_parents(child_key):  # valued gamma r_T until now
+                self._invalidate(key)
         q = reward
         if self.optimistic_over is not None and feasible and action != self.target_id:
             q = reward + self.gamma * self.value(child_key)  # optimistic initial value
@@ -233,6 +303,10 @@ class QTree:
         node.children[action] = edge
         self._num_edges += 1
         self._q_bar += abs(edge.q)
+        self._invalidate(parent)  # ``action`` is tried from the parent now
+        if feasible and action != self.target_id:
+            self._in_edges.setdefault(child_key, []).append(edge)
+        self._refresh_known(parent)
         return edge, created
 
     def update(self, edge: Edge) -> float:
@@ -251,6 +325,7 @@ class QTree:
         self._q_bar += abs(edge.q + delta) - abs(edge.q)
         edge.q += delta
         edge.visits += 1
+        self._invalidate(edge.parent)
         return delta
 
     def sweep(self) -> None:
@@ -266,6 +341,7 @@ class QTree:
             for edge in node.children.values():
                 if edge.feasible and edge.action != self.target_id:
                     edge.q = edge.reward + self.gamma * self.max_q(edge.child)
+        self._memo.clear()
         self.recompute_q_bar()
 
     def recompute_q_bar(self) -> float:

@@ -63,3 +63,22 @@ def test_tag_names_the_outputs_with_one_separator() -> None:
         benchmark.parse_args(['--ros', '--hlrnd-rule', 'positive-q'])
     with pytest.raises(SystemExit):
         benchmark.parse_args(['--sweep-windows', '0'])
+
+
+def test_default_tables_from_a_sweep_equal_the_default_command(tmp_path: Path) -> None:
+    """--from-json on a sweep writes, byte for byte, what the default command writes."""
+    common = ['--oracle', 'synthetic', '--trainings', '2', '--workers', '1', '--scenarios', 's1']
+    assert benchmark.main([*common, '--out', str(tmp_path / 'direct')]) == 0
+    assert benchmark.main([*common, '--paper-sweep', '--out', str(tmp_path / 'sweep')]) == 0
+    sweep = tmp_path / 'sweep' / 'benchmark_sweep.json'
+    assert (tmp_path / 'sweep' / 'benchmark_sweep.md').read_text().count('★') >= 5
+    code = benchmark.main([*common, '--from-json', str(sweep), '--out', str(tmp_path / 'derived')])
+    assert code == 0
+    direct = (tmp_path / 'direct' / 'benchmark.md').read_text()
+    assert (tmp_path / 'derived' / 'benchmark.md').read_text() == direct
+    records = json.loads((tmp_path / 'derived' / 'benchmark.json').read_text())['records']
+    fields = ('policy', 'seed', 'sequence', 'episodes', 'mp_calls', 'first_optimal_episode')
+    again = json.loads((tmp_path / 'direct' / 'benchmark.json').read_text())['records']
+    assert [[r[k] for k in fields] for r in records] == [[r[k] for k in fields] for r in again]
+    bad = benchmark.main([*common, '--trainings', '3', '--from-json', str(sweep)])
+    assert bad == 2

@@ -80,3 +80,26 @@ def test_readme_block_is_generated_from_the_json_and_replaced_in_place() -> None
     readme = (RESULTS.parents[1] / 'README.md').read_text()
     sweep = RESULTS / 'benchmark_sweep.json'
     assert section(data, json.loads(sweep.read_text()) if sweep.exists() else None) in readme
+
+
+def test_a_planner_timeout_stops_the_benchmark_instead_of_counting_as_infeasible() -> None:
+    """Under load a 2 s planning limit turned feasible checks into TIMEOUT = infeasible and
+    changed S1's tables (xi_p 6 instead of 10); the benchmark now refuses such an answer."""
+    from types import SimpleNamespace
+
+    from qtree_task_planner.benchmarking.runner import PLANNING_TIME_LIMIT_S, SharedOracle
+
+    class Planner:
+        def __init__(self, reason: int) -> None:
+            self.reason = reason
+
+        def check(self, object_id: str, relocated: list[str]) -> SimpleNamespace:
+            return SimpleNamespace(feasible=False, reason=self.reason)
+
+    oracle = SharedOracle('s1', 'planner')
+    oracle._inner = Planner(205)  # SCENE_COLLISION: a geometric answer, memoised
+    assert oracle.feasible(('O1',), 'T') is False and oracle.planner_runs == 1
+    oracle._inner = Planner(301)  # TIMEOUT
+    with pytest.raises(RuntimeError, match='timed out'):
+        oracle.feasible(('O2',), 'T')
+    assert PLANNING_TIME_LIMIT_S >= 60.0

@@ -114,3 +114,18 @@ def test_a_loaded_planner_never_gives_a_wrong_answer(feasible: bool, before: lis
         assert too_many_busy or before.count('lost') > FAST.missing_retries
         return
     assert answer is feasible
+
+
+def test_answer_reads_blocking_ids() -> None:
+    blocked = Response.SCENE_COLLISION
+    client = ScriptedClient(
+        Response(feasible=True, reason=Response.SUCCESS),
+        Response(blocking_ids=['O1', 'O3', 'O2'], feasible=False, reason=blocked),
+        Response(blocked_by_immovable=True, feasible=False, reason=Response.JOINT_LIMIT),
+        Response(feasible=False, reason=blocked),
+    )
+    oracle = RosPlannerOracle(client, 1.0, 1.0)
+    assert oracle.answer((), 'O1') == (True, ())
+    assert oracle.answer(('O3',), 'T') == (False, ('O1', 'O2'))  # relocated ids dropped
+    assert oracle.answer((), 'T') == (False, ())  # blocked by nothing movable
+    assert oracle.answer((), 'T') == (False, None)  # no blocker named: no report

@@ -1,0 +1,390 @@
+"""BLOCKER-SEARCH (ours, issue #14): a conflict-directed best-first search over SETS of relocated
+obstacles that only considers objects that block the target or block a blocker.
+
+Model. By Assumption 2 relocating o after S depends on the set S only; we also assume
+MONOTONICITY (removing more objects never makes a feasible relocation infeasible; true of the
+clearing-set model of :class:`~qtree_task_planner.oracle.TableOracle` and of a collision-only
+planner). An infeasible answer for (S, o) with blockers B yields the CONSTRAINT "before o, at least
+one object of X must be relocated", X = B minus S, o and the target. A constraint is SOUND when
+every set whose removal makes o feasible meets X; with monotonicity this is the same as: o stays
+infeasible when every obstacle except X is removed. Sound constraints come from an oracle that
+declares ``sound_blockers`` (complete reports), or are VERIFIED by that one extra query,
+(all obstacles but X relocated, o); a report that fails the check, or no report at all
+(``blocking_ids=None``), is replaced by the trivial sound constraint X = all obstacles not in S.
+
+Search. A set S of obstacles is a CANDIDATE when its objects can be ordered so that each one's
+known constraints are met by the objects before it, and the target's by all of S (known
+infeasibility is never asked again). Every true solution is a candidate, so the smallest
+candidate size k is a lower bound of the optimum. Candidates of size <= k are found by
+depth-first branching on an unmet constraint (the target's, or, when some objects of S cannot
+be ordered, the union of one unmet constraint of each of them): every candidate containing S
+must contain one of the branch objects, so the branching is complete, and only objects named
+in constraints ever enter S. The smallest candidate is tested with real queries in its order;
+a failed query adds a constraint and the search resumes at the same k; when no candidate of
+size k is left, k grows by one. A tested candidate that succeeds is returned.
+
+When the answer is provably optimal (``certified=True`` in the result): Assumption 2,
+monotonicity, and every constraint sound (declared or verified, see above). Then
+``status='optimal'`` means no feasible sequence has fewer objects, and ``status='unsolvable'``
+means no feasible sequence exists at all (e.g. the target blocked by nothing movable). With
+``verify=False`` on an oracle whose reports are not declared sound (the planner's response field
+names only its most promising approach), the search is a HEURISTIC: constraints may be wrong, the
+answer is feasible (every step was checked) but may be longer than the optimum, and
+``unsolvable`` may be wrong. Without monotonicity a verification can also be wrong.
+
+Budget. ``max_planner_runs`` (real oracle runs), ``time_limit_s`` and ``max_expansions`` (DFS
+nodes of the candidate enumeration) bound the search; hitting one returns ``status='budget'``
+with ``budget_hit`` naming it, no sequence, and ``lower_bound`` (level, target included) that is
+certified under the same conditions.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from qtree_task_planner.exceptions import InvalidParameterError, InvalidScenarioError
+from qtree_task_planner.oracle import FeasibilityAnswer, FeasibilityOracle, SetKey, ask
+
+STATUS_OPTIMAL = 'optimal'
+STATUS_UNSOLVABLE = 'unsolvable'
+STATUS_BUDGET = 'budget'
+BUDGET_RUNS = 'planner_runs'
+BUDGET_TIME = 'time'
+BUDGET_EXPANSIONS = 'expansions'
+BUDGET_CANCELLED = 'cancelled'
+
+
+@dataclass(frozen=True)
+class BlockerSearchConfig:
+    """Budget and options of one search.
+
+    Attributes:
+        max_planner_runs: real oracle runs allowed (> 0).
+        time_limit_s: wall-time cap [s] (> 0), checked between queries and DFS nodes.
+        max_expansions: DFS nodes of the candidate enumeration allowed (> 0).
+        verify: 'auto' (verify reports unless the oracle declares ``sound_blockers``), 'always'
+            or 'never' (heuristic unless the reports are sound).
+    """
+
+    max_planner_runs: int = 5000
+    time_limit_s: float = 120.0
+    max_expansions: int = 200_000
+    verify: str = 'auto'
+
+    def __post_init__(self) -> None:
+        """Validate every field.
+
+        Raises:
+            InvalidParameterError: a field out of range (names the field).
+        """
+        if self.max_planner_runs <= 0:
+            raise InvalidParameterError('max_planner_runs', self.max_planner_runs, 'must be > 0')
+        if not self.time_limit_s > 0.0:
+            raise InvalidParameterError('time_limit_s', self.time_limit_s, 'must be > 0')
+        if self.max_expansions <= 0:
+            raise InvalidParameterError('max_expansions', self.max_expansions, 'must be > 0')
+        if self.verify not in ('auto', 'always', 'never'):
+            raise InvalidParameterError('verify', self.verify, "must be 'auto', 'always', 'never'")
+
+
+@dataclass(frozen=True)
+class BlockerSearchResult:
+    """Outcome of one search.
+
+    Attributes:
+        sequence: obstacles in relocation order, then the target; ``()`` unless ``optimal``.
+        status: ``'optimal'``, ``'unsolvable'`` or ``'budget'``.
+        lower_bound: no feasible sequence is shorter than this level (target included;
+            ``len(sequence)`` when optimal, 0 when unsolvable).
+        certified: every constraint was sound (declared or verified): the status and bound are
+            proven under Assumption 2 and monotonicity; False: heuristic.
+        budget_hit: ``''``, ``'planner_runs'``, ``'time'`` or ``'expansions'``.
+        planner_runs: real oracle runs of this search (verifications included).
+        queries: questions asked to the oracle (cached repeats excluded).
+        verifications: of those, soundness checks of reports.
+        candidates: candidate sets tested with real queries.
+        expansions: DFS nodes of the candidate enumeration.
+        constraints: constraints learned.
+        relevant: objects named in constraints (the only ones that may enter a candidate).
+        wall_time_s: duration [s].
+    """
+
+    sequence: tuple[str, ...]
+    status: str
+    lower_bound: int
+    certified: bool
+    budget_hit: str
+    planner_runs: int
+    queries: int
+    verifications: int
+    candidates: int
+    expansions: int
+    constraints: int
+    relevant: int
+    wall_time_s: float
+
+    @property
+    def solved(self) -> bool:
+        """A feasible sequence ending with the target was found."""
+        return bool(self.sequence)
+
+
+class _BudgetExceededError(Exception):
+    def __init__(self, which: str) -> None:
+        self.which = which
+
+
+class BlockerSearch:
+    """One search (see the module docstring); state readable after :meth:`run`.
+
+    Args:
+        obstacle_ids: the obstacles, in scenario order (deterministic tie-breaking).
+        target_id: the target T.
+        oracle: any feasibility oracle; blocker reports are read through
+            :func:`~qtree_task_planner.oracle.ask`.
+        config: budget and options.
+        on_candidate: called after each tested candidate with the objects walked (the last may
+            have failed) and whether the target was reached; returning False cancels the search
+            (``budget_hit='cancelled'``).
+
+    Raises:
+        InvalidScenarioError: the target is an obstacle, or duplicate ids.
+    """
+
+    def __init__(
+        self,
+        obstacle_ids: tuple[str, ...],
+        target_id: str,
+        oracle: FeasibilityOracle,
+        config: BlockerSearchConfig | None = None,
+        on_candidate: Callable[[tuple[str, ...], bool], bool] | None = None,
+    ) -> None:
+        obstacles = tuple(obstacle_ids)
+        if target_id in obstacles:
+            raise InvalidScenarioError(f'target {target_id!r} is also listed as an obstacle')
+        if len(set(obstacles)) != len(obstacles):
+            raise InvalidScenarioError('duplicate obstacle ids')
+        self.obstacles = obstacles
+        self.target = target_id
+        self.oracle = oracle
+        self.config = config or BlockerSearchConfig()
+        self.on_candidate = on_candidate
+        self.rank = {o: i for i, o in enumerate(obstacles)}
+        self.all = frozenset(obstacles)
+        sound = bool(getattr(oracle, 'sound_blockers', False))
+        self.verify = self.config.verify == 'always' or (
+            self.config.verify == 'auto' and not sound
+        )
+        self.certified = sound or self.verify
+        self.constraints: dict[str, list[frozenset[str]]] = {}
+        self.answers: dict[SetKey, FeasibilityAnswer] = {}
+        self.queries = self.verifications = self.candidates = self.expansions = 0
+        self.lower_bound = 1
+        self._cut = False
+        self._failed: dict[frozenset[str], bool] = {}
+        self._runs0 = oracle.planner_runs
+        self._start = time.monotonic()
+
+    # -- oracle with constraints --
+
+    def _check_budget(self) -> None:
+        if self.oracle.planner_runs - self._runs0 >= self.config.max_planner_runs:
+            raise _BudgetExceededError(BUDGET_RUNS)
+        if time.monotonic() - self._start > self.config.time_limit_s:
+            raise _BudgetExceededError(BUDGET_TIME)
+
+    def _ask(self, order: tuple[str, ...], obj: str) -> FeasibilityAnswer:
+        key = (frozenset(order), obj)
+        if key not in self.answers:
+            self._check_budget()
+            self.queries += 1
+            self.answers[key] = ask(self.oracle, order, obj)
+        return self.answers[key]
+
+    def _met(self, obj: str, done: frozenset[str]) -> bool:
+        """Every known constraint of ``obj`` is met by ``done``."""
+        return all(c & done for c in self.constraints.get(obj, ()))
+
+    def query(self, order: tuple[str, ...], obj: str) -> bool:
+        """Can ``obj`` be relocated after ``order``? Known constraints answer without a query; an
+        infeasible answer adds a (sound, or verified, or trivial) constraint."""
+        done = frozenset(order)
+        if not self._met(obj, done):
+            return False
+        answer = self._ask(order, obj)
+        if not answer.feasible:
+            self._learn(done, obj, answer.blocking_ids)
+        return answer.feasible
+
+    def _learn(self, done: frozenset[str], obj: str, blockers: tuple[str, ...] | None) -> None:
+        trivial = self.all - done - {obj}
+        if blockers is None:
+            blocking = trivial
+        else:
+            blocking = frozenset(blockers) & self.all - done - {obj}
+            if self.verify and blocking != trivial:
+                rest = tuple(o for o in self.obstacles if o not in blocking and o != obj)
+                self.verifications += (frozenset(rest), obj) not in self.answers
+                if self._ask(rest, obj).feasible:  # the report missed an approach
+                    blocking = trivial
+        self.constraints.setdefault(obj, []).append(blocking)
+
+    # -- candidate enumeration --
+
+    def _closure(self, chosen: frozenset[str]) -> list[str]:
+        """An order of the objects of ``chosen`` meeting the known constraints, greedily."""
+        order: list[str] = []
+        done: frozenset[str] = frozenset()
+        left = sorted(chosen, key=self.rank.__getitem__)
+        progress = True
+        while left and progress:
+            progress = False
+            for obj in left:
+                if self._met(obj, done):
+                    order.append(obj)
+                    done = done | {obj}
+                    left.remove(obj)
+                    progress = True
+                    break
+        return order
+
+    def _branch(self, chosen: frozenset[str], order: list[str]) -> list[str] | None:
+        """Objects one of which every candidate containing ``chosen`` must add; None: ``chosen``
+        is a candidate itself."""
+        done = frozenset(order)
+        if len(order) == len(chosen):
+            unmet = [c for c in self.constraints.get(self.target, ()) if not c & done]
+            if not unmet:
+                return None
+            return sorted(min(unmet, key=len), key=self.rank.__getitem__)
+        union: set[str] = set()
+        for obj in chosen - done:
+            unmet = [c for c in self.constraints.get(obj, ()) if not c & done]
+            union |= min(unmet, key=len) - chosen
+        return sorted(union, key=self.rank.__getitem__)
+
+    def _disjoint_unmet(self, chosen: frozenset[str], order: list[str]) -> int:
+        """How many more objects any candidate containing ``chosen`` needs at least: a greedy
+        packing of pairwise disjoint unmet constraints that no object of ``chosen`` can meet."""
+        done = frozenset(order)
+        needs = [c for c in self.constraints.get(self.target, ()) if not c & chosen]
+        for obj in chosen - done:
+            needs += [c for c in self.constraints.get(obj, ()) if not c & chosen]
+        count, used = 0, set()
+        for c in sorted(needs, key=len):
+            if not c & used:
+                count += 1
+                used |= c
+        return count
+
+    def _candidate(self, k: int) -> list[str] | None:
+        """The first candidate with at most ``k`` obstacles (in its order), or None.
+
+        Sets shown to have no candidate superset of size <= k stay in ``self._failed`` until k
+        grows: more constraints never create a candidate.
+        """
+        failed = self._failed  # set -> whether the size bound cut its sub-tree
+
+        def dfs(chosen: frozenset[str]) -> tuple[list[str] | None, bool]:
+            self.expansions += 1
+            if self.expansions > self.config.max_expansions:
+                raise _BudgetExceededError(BUDGET_EXPANSIONS)
+            if self.expansions % 256 == 0 and time.monotonic() - self._start > (
+                self.config.time_limit_s
+            ):
+                raise _BudgetExceededError(BUDGET_TIME)
+            order = self._closure(chosen)
+            branch = self._branch(chosen, order)
+            if branch is None:
+                return order, False
+            if not branch:
+                return None, False
+            if len(chosen) >= k or len(chosen) + self._disjoint_unmet(chosen, order) > k:
+                return None, True  # a larger candidate may exist
+            cut = False
+            for obj in branch:
+                child = chosen | {obj}
+                if child in failed:
+                    cut = cut or failed[child]
+                    continue
+                found, child_cut = dfs(child)
+                if found is not None:
+                    return found, False
+                failed[child] = child_cut
+                cut = cut or child_cut
+            return None, cut
+
+        root: frozenset[str] = frozenset()
+        if root in failed:
+            self._cut = failed[root]
+            return None
+        found, self._cut = dfs(root)
+        if found is None:
+            failed[root] = self._cut
+        return found
+
+    def _test(self, order: list[str]) -> bool:
+        """Relocate the candidate in its order, then the target; False at the first failure."""
+        self.candidates += 1
+        walked: list[str] = []
+        reached = True
+        for i, obj in enumerate((*order, self.target)):
+            walked.append(obj)
+            if not self.query(tuple(order[:i]), obj):
+                reached = False
+                break
+        if self.on_candidate is not None and self.on_candidate(tuple(walked), reached) is False:
+            raise _BudgetExceededError(BUDGET_CANCELLED)
+        return reached
+
+    # -- driver --
+
+    def run(self) -> BlockerSearchResult:
+        """Search until the optimum, a proof of unsolvability, or the budget."""
+        k = 0
+        try:
+            while k <= len(self.obstacles):
+                self.lower_bound = k + 1
+                order = self._candidate(k)
+                if order is None:
+                    if not self._cut:  # no candidate of any size: unsolvable
+                        break
+                    k += 1
+                    self._failed = {}
+                    continue
+                if self._test(order):
+                    return self._result((*order, self.target), STATUS_OPTIMAL, '')
+            self.lower_bound = 0
+            return self._result((), STATUS_UNSOLVABLE, '')
+        except _BudgetExceededError as hit:
+            return self._result((), STATUS_BUDGET, hit.which)
+
+    def _result(self, sequence: tuple[str, ...], status: str, hit: str) -> BlockerSearchResult:
+        relevant = {o for sets in self.constraints.values() for c in sets for o in c}
+        return BlockerSearchResult(
+            sequence=sequence,
+            status=status,
+            lower_bound=len(sequence) if sequence else self.lower_bound,
+            certified=self.certified,
+            budget_hit=hit,
+            planner_runs=self.oracle.planner_runs - self._runs0,
+            queries=self.queries,
+            verifications=self.verifications,
+            candidates=self.candidates,
+            expansions=self.expansions,
+            constraints=sum(len(v) for v in self.constraints.values()),
+            relevant=len(relevant),
+            wall_time_s=time.monotonic() - self._start,
+        )
+
+
+def blocker_search(
+    obstacle_ids: tuple[str, ...],
+    target_id: str,
+    oracle: FeasibilityOracle,
+    config: BlockerSearchConfig | None = None,
+) -> BlockerSearchResult:
+    """Run a :class:`BlockerSearch` (see there and the module docstring)."""
+    return BlockerSearch(obstacle_ids, target_id, oracle, config).run()

@@ -1,0 +1,178 @@
+"""One ``RetrieveTarget`` goal of the ``task_planner`` node, from its request to its result code.
+
+Training runs inside the (synchronous) execute callback on a MultiThreadedExecutor; every new tree
+edge is one ``/relocate_object`` call (execute=false) made with ``call_async`` and waited for on a
+threading.Event, so the response is handled by another executor thread.
+
+Failure behaviour (result ``error_code`` and ``message`` always say why; the node keeps running):
+invalid goal field -> INVALID_GOAL (accepted then aborted, the message names the field); another
+goal running -> INVALID_GOAL ("busy"); no /scene in time, no /relocate_object service, a call
+timing out or a request rejected by the planner (reason 1xx, e.g. unknown object) ->
+MOTION_PLANNER_UNAVAILABLE, with the statistics learned so far in the result; scene
+without a target in the clutter or no sequence learned -> NO_SOLUTION; cancel -> CANCELED (checked
+once per episode; during the execution the arm stops at once, result ``executed_ids``); an
+execution step failing -> EXECUTION_FAILED.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from qtree_msgs.action import RetrieveTarget
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+
+from qtree_task_planner.exceptions import (
+    InvalidParameterError,
+    InvalidScenarioError,
+    OracleUnavailableError,
+)
+from qtree_task_planner.goal import settings_from_goal
+from qtree_task_planner.messages import feedback_msg, movable_from_scene
+from qtree_task_planner.planners import make_trainer
+from qtree_task_planner.ros_oracle import RosPlannerOracle
+from qtree_task_planner.sequence_execution import CANCELED, FAILED, SequenceExecution
+from qtree_task_planner.training import STOP_CANCELLED
+
+Result = RetrieveTarget.Result
+TIMEOUTS = {  # name: (default [s], description)
+    'planner_timeout_s': (30.0, 'timeout of one feasibility RelocateObject call [s]'),
+    'planner_wait_s': (10.0, 'wait for the /relocate_object service at goal start [s]'),
+    'execute_timeout_s': (180.0, 'timeout of one RelocateObject call with execute=true [s]'),
+    'scene_wait_s': (10.0, 'wait for a /scene message at goal start [s]'),
+}
+TIMEOUT_RANGE_S = (0.1, 3600.0)
+
+
+def timeout_descriptor(description: str) -> ParameterDescriptor:
+    """Descriptor of a timeout parameter in :data:`TIMEOUT_RANGE_S` [s]."""
+    rng = FloatingPointRange(from_value=TIMEOUT_RANGE_S[0], to_value=TIMEOUT_RANGE_S[1])
+    return ParameterDescriptor(description=description, floating_point_range=[rng])
+
+
+def check_parameters(params: list) -> SetParametersResult:
+    """The on-set-parameters answer: every timeout a float in :data:`TIMEOUT_RANGE_S`."""
+    low, high = TIMEOUT_RANGE_S
+    for param in params:
+        if param.name in TIMEOUTS and not (
+            isinstance(param.value, float) and low <= param.value <= high
+        ):
+            reason = f'{param.name} must be a float in [0.1, 3600] s, got {param.value!r}'
+            return SetParametersResult(successful=False, reason=reason)
+    return SetParametersResult(successful=True)
+
+
+@dataclass
+class GoalContext:
+    """What a goal needs from the node.
+
+    Attributes:
+        scene: the last /scene message (None before the first).
+        planner: the /relocate_object client.
+        param: a timeout parameter by name [s].
+        stopping: set when the node shuts down (ends a training at once).
+        publish_stats: ``(stats, policy name)`` → /training_stats.
+        publish_tree: ``(tree, episode)`` → /qtree.
+        execution: runs the learned sequence (stops the arm on cancel).
+        oracle: the running goal's planner oracle (its ``retries``), None before training.
+    """
+
+    scene: Callable[[], Any]
+    planner: Any
+    param: Callable[[str], float]
+    stopping: threading.Event
+    publish_stats: Callable[[Any, str], None]
+    publish_tree: Callable[[Any, int], None]
+    execution: SequenceExecution
+    oracle: RosPlannerOracle | None = None
+
+
+def run_goal(goal_handle: Any, ctx: GoalContext) -> tuple[int, str, Any, bool]:
+    """Train (and execute) for one goal.
+
+    Returns:
+        ``(error_code, message, TrainingResult or None, executed)``.
+    """
+    try:
+        settings = settings_from_goal(goal_handle.request)
+    except InvalidParameterError as err:
+        return Result.INVALID_GOAL, str(err), None, False
+    if not wait_for(lambda: ctx.scene() is not None, ctx.param('scene_wait_s')):
+        msg = 'no /scene received (is the simulator or a scene publisher running?)'
+        return Result.MOTION_PLANNER_UNAVAILABLE, msg, None, False
+    try:
+        movable, target = movable_from_scene(ctx.scene())
+    except InvalidScenarioError as err:
+        return Result.NO_SOLUTION, str(err), None, False
+    if not ctx.planner.wait_for_service(timeout_sec=ctx.param('planner_wait_s')):
+        msg = 'service /relocate_object not available'
+        return Result.MOTION_PLANNER_UNAVAILABLE, msg, None, False
+    oracle = ctx.oracle = RosPlannerOracle(
+        ctx.planner, ctx.param('planner_timeout_s'), ctx.param('scene_wait_s'), ctx.stopping
+    )
+    trainer = make_trainer(movable, target, oracle, settings.config)
+    every = settings.feedback_every
+
+    def on_episode(stats) -> bool:
+        ctx.publish_stats(stats, trainer.policy.name)
+        if stats.episode % every == 0:
+            goal_handle.publish_feedback(feedback_msg(stats))
+            ctx.publish_tree(trainer.tree, stats.episode)
+        return not (goal_handle.is_cancel_requested or ctx.stopping.is_set())
+
+    try:
+        result = trainer.run(on_episode)
+    except OracleUnavailableError as err:
+        partial = trainer.result('motion_planner_unavailable')
+        return Result.MOTION_PLANNER_UNAVAILABLE, str(err), partial, False
+    finally:
+        ctx.publish_tree(trainer.tree, trainer.episode)
+    if result.stop_reason == STOP_CANCELLED:
+        return Result.CANCELED, f'canceled after {result.episodes} episodes', result, False
+    if not result.sequence:
+        msg = f'no feasible sequence learned in {result.episodes} episodes'
+        return Result.NO_SOLUTION, msg, result, False
+    summary = (
+        f'{result.policy}: {list(result.sequence)} after {result.episodes} episodes, '
+        f'{result.mp_calls} MP calls ({result.stop_reason})'
+    )
+    if not settings.execute:
+        return Result.SUCCESS, summary, result, False
+    timeout_s = ctx.param('execute_timeout_s')
+    status, error = ctx.execution.run(result.sequence, timeout_s, ctx.stopping)
+    if status == CANCELED:
+        return Result.CANCELED, error, result, False
+    if status == FAILED:
+        return Result.EXECUTION_FAILED, error, result, False
+    return Result.SUCCESS, summary + ', executed', result, True
+
+
+def end_goal(goal_handle: Any, code: int, stopping: threading.Event) -> str:
+    """Succeed, cancel or abort ``goal_handle`` by ``code``; '' or why it ended by shutdown.
+
+    Raises:
+        Exception: the goal handle failed while the node is not shutting down.
+    """
+    try:
+        if code == Result.SUCCESS:
+            goal_handle.succeed()
+        elif code == Result.CANCELED and goal_handle.is_cancel_requested:
+            goal_handle.canceled()
+        else:  # failures, and a training ended by the node shutting down
+            goal_handle.abort()
+    except Exception as err:  # the context is gone when the node shuts down mid-goal
+        if not stopping.is_set():
+            raise
+        return f'goal ended by shutdown: {err}'
+    return ''
+
+
+def wait_for(predicate: Callable[[], bool], timeout_s: float) -> bool:
+    """Poll ``predicate`` every 50 ms for up to ``timeout_s`` [s]; its last value."""
+    event = threading.Event()
+    while not predicate() and timeout_s > 0:
+        event.wait(0.05)
+        timeout_s -= 0.05
+    return predicate()

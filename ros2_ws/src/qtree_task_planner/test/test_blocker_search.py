@@ -1,0 +1,141 @@
+"""BLOCKER-SEARCH: optimality on hand-built scenes, agreement with the exact search, budgets."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from qtree_task_planner.blocker_search import (
+    BUDGET_EXPANSIONS,
+    BUDGET_RUNS,
+    BUDGET_TIME,
+    STATUS_BUDGET,
+    STATUS_OPTIMAL,
+    STATUS_UNSOLVABLE,
+    BlockerSearchConfig,
+    blocker_search,
+)
+from qtree_task_planner.exact import solve_exact
+from qtree_task_planner.exceptions import InvalidParameterError, InvalidScenarioError
+from qtree_task_planner.oracle import MemoOracle, TableOracle
+from qtree_task_planner.synthetic import (
+    TOY_OBSTACLES,
+    TOY_OPTIMAL_LEVEL,
+    TOY_REQUIREMENTS,
+    decoy_requirements,
+    random_requirements,
+)
+
+
+def _feasible_order(sequence, requirements) -> bool:
+    oracle = TableOracle(requirements)
+    return all(oracle.feasible(sequence[:i], o) for i, o in enumerate(sequence))
+
+
+def test_toy_scene_optimum_is_certified() -> None:
+    result = blocker_search(TOY_OBSTACLES, 'T', TableOracle(TOY_REQUIREMENTS))
+    assert result.status == STATUS_OPTIMAL and result.certified and not result.budget_hit
+    assert len(result.sequence) == TOY_OPTIMAL_LEVEL == result.lower_bound
+    assert set(result.sequence) == {'O1', 'O2', 'O3', 'T'}  # the unique optimal set
+    assert _feasible_order(result.sequence, TOY_REQUIREMENTS)
+
+
+def test_decoys_are_never_asked_about() -> None:
+    obstacles, requirements = decoy_requirements(3, 15)
+    oracle = TableOracle(requirements)
+    result = blocker_search(obstacles, 'T', oracle)
+    assert result.sequence == ('C3', 'C2', 'C1', 'T') and result.status == STATUS_OPTIMAL
+    assert result.planner_runs == oracle.planner_runs <= 7  # 4 failures + 3 steps of the chain
+    assert result.relevant == 3  # the decoys never entered a constraint
+    exact = solve_exact(obstacles, 'T', TableOracle(requirements))
+    assert exact.level == 4 and exact.queries > 100 * result.planner_runs
+
+
+@pytest.mark.parametrize(
+    ('requirements', 'reason'),
+    [
+        ({'T': []}, 'target blocked by nothing movable'),
+        ({'T': [{'O1'}], 'O1': [{'O2'}], 'O2': [{'O1'}]}, 'a cycle'),
+        ({'T': [{'O1'}], 'O1': []}, 'its only blocker cannot move'),
+    ],
+)
+def test_unsolvable_scenes_are_proven(requirements, reason) -> None:
+    for report in ('union', 'fewest', 'none'):
+        result = blocker_search(('O1', 'O2'), 'T', TableOracle(requirements, report=report))
+        assert result.status == STATUS_UNSOLVABLE, reason
+        assert result.sequence == () and result.lower_bound == 0 and result.certified
+
+
+def test_free_target_and_no_obstacles() -> None:
+    assert blocker_search((), 'T', TableOracle({})).sequence == ('T',)
+    assert blocker_search((), 'T', TableOracle({'T': []})).status == STATUS_UNSOLVABLE
+    result = blocker_search(('O1',), 'T', TableOracle({}))
+    assert result.sequence == ('T',) and result.planner_runs == 1
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    n=st.integers(1, 8),
+    report=st.sampled_from(['union', 'fewest', 'none']),
+)
+def test_same_optimal_level_as_the_exact_search(seed, n, report) -> None:
+    obstacles, requirements = random_requirements(n, np.random.default_rng(seed), p_blocked=0.6)
+    exact = solve_exact(obstacles, 'T', TableOracle(requirements))
+    result = blocker_search(obstacles, 'T', TableOracle(requirements, report=report))
+    assert result.certified and result.status != STATUS_BUDGET
+    assert len(result.sequence) == exact.level
+    if result.sequence:
+        assert _feasible_order(result.sequence, requirements)
+
+
+def test_unverified_partial_reports_are_a_heuristic() -> None:
+    # T: {O1, O2} or {O3}; the 'fewest' report names only O3, which is blocked for good
+    requirements = {'T': [{'O1', 'O2'}, {'O3'}], 'O3': [{'O4'}], 'O4': []}
+    obstacles = ('O1', 'O2', 'O3', 'O4')
+    oracle = TableOracle(requirements, report='fewest')
+    heuristic = blocker_search(obstacles, 'T', oracle, BlockerSearchConfig(verify='never'))
+    assert not heuristic.certified and heuristic.status == STATUS_UNSOLVABLE  # wrong, and says so
+    verified = blocker_search(obstacles, 'T', TableOracle(requirements, report='fewest'))
+    assert verified.certified and verified.sequence == ('O1', 'O2', 'T') and verified.verifications
+
+
+def test_budgets_stop_the_search_and_say_which() -> None:
+    obstacles, requirements = random_requirements(12, np.random.default_rng(1), p_blocked=0.6)
+    oracle = TableOracle(requirements, report='none')
+    runs = blocker_search(obstacles, 'T', oracle, BlockerSearchConfig(max_planner_runs=5))
+    assert runs.status == STATUS_BUDGET and runs.budget_hit == BUDGET_RUNS
+    assert runs.planner_runs == 5 and runs.sequence == ()
+    exact = solve_exact(obstacles, 'T', TableOracle(requirements))
+    assert exact.level == 7 and 1 <= runs.lower_bound <= exact.level  # the bound stays valid
+    few = BlockerSearchConfig(max_expansions=1)
+    expansions = blocker_search(TOY_OBSTACLES, 'T', TableOracle(TOY_REQUIREMENTS), few)
+    assert expansions.budget_hit == BUDGET_EXPANSIONS
+    quick = BlockerSearchConfig(time_limit_s=1e-9)
+    timed = blocker_search(TOY_OBSTACLES, 'T', TableOracle(TOY_REQUIREMENTS), quick)
+    assert timed.budget_hit == BUDGET_TIME and timed.status == STATUS_BUDGET
+
+
+def test_memo_oracle_passes_reports_through() -> None:
+    memo = MemoOracle(TableOracle(TOY_REQUIREMENTS))
+    assert memo.sound_blockers
+    assert memo.answer((), 'T') == (False, ('O1', 'O2', 'O3', 'O4', 'O5'))
+    assert memo.answer((), 'T').blocking_ids and memo.planner_runs == 1
+    result = blocker_search(TOY_OBSTACLES, 'T', memo)
+    assert len(result.sequence) == TOY_OPTIMAL_LEVEL
+
+
+@pytest.mark.parametrize(
+    'field',
+    [('max_planner_runs', 0), ('time_limit_s', 0.0), ('max_expansions', -1), ('verify', 'x')],
+)
+def test_bad_config_is_rejected_with_the_field_name(field) -> None:
+    name, value = field
+    with pytest.raises(InvalidParameterError, match=name):
+        BlockerSearchConfig(**{name: value})
+
+
+def test_bad_scenes_are_rejected() -> None:
+    with pytest.raises(InvalidScenarioError, match='target'):
+        blocker_search(('O1', 'T'), 'T', TableOracle({}))
+    with pytest.raises(InvalidScenarioError, match='duplicate'):
+        blocker_search(('O1', 'O1'), 'T', TableOracle({}))

@@ -1,0 +1,160 @@
+"""The ``motion_planner`` node's request handling, thread-safe and without ROS.
+
+:class:`PlannerService` holds the :class:`~stpik_motion_planner.planner.MotionPlanner` of the
+current scene, rebuilds it when /scene changes, answers relocation requests and serialises
+executions. The node's callbacks (several executor threads) convert messages and call it.
+
+Limits and timing of a request:
+
+- At most ``MAX_RELOCATED_IDS`` (256) relocated ids and ``MAX_ID_CHARS`` (256) characters per id
+  (:mod:`.scene_checks`); an id not in the scene is ``UNKNOWN_OBJECT`` whatever its length.
+  Answers, log lines and ``/motion_planner/events`` quote at most 5 ids, each cut to 40
+  characters; the event carries at most 256 ids of at most 256 characters.
+- Bad requests, ``NO_SCENE`` and cache hits are answered at once, without waiting for the
+  planner. Checks that need planning run one at a time (one STPIK state per planner); a request
+  waits at most ``request_timeout_s`` for its turn, then ``PLANNER_BUSY``. ``time_limit_s`` bounds
+  the planning itself, so an answer takes at most about ``request_timeout_s + time_limit_s``.
+  At most :data:`MAX_WAITING_PLANS` requests wait or plan at once; more get ``PLANNER_BUSY`` at
+  once, so the executor (``EXECUTOR_THREADS`` threads) always has threads for /joint_states,
+  /scene and the other requests.
+- One execution at a time (another gets ``EXECUTION_FAILED``); /scene messages received
+  meanwhile (the carried object moves) rebuild the planner once, after the execution. If no
+  joint state arrives for ``joint_state_timeout_s`` during execution, it stops with
+  ``EXECUTION_FAILED`` ("the simulator stopped publishing /joint_states").
+- The scene contract (QoS, frame, what "relocated" means) is in ``qtree_msgs/msg/Scene.msg``:
+  an object GRASPED or RELOCATED keeps the pose it had while IN_CLUTTER, so carrying it away
+  does not rebuild the planner nor empty its cache.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from qtree_scene.message import scenario_from_msg
+from qtree_scene.scene import ObjectSpec
+
+from stpik_motion_planner.config import PlannerConfig
+from stpik_motion_planner.exceptions import MotionPlannerError
+from stpik_motion_planner.planner import MotionPlanner
+from stpik_motion_planner.result import PlanResult, Reason
+
+MAX_WAITING_PLANS = 8  # requests waiting for or holding the planner at once [-]
+
+
+class PlannerService:
+    """The planner of the current scene, its request queue and the one execution at a time."""
+
+    def __init__(
+        self, config: Callable[[], PlannerConfig], log: Callable[[str, str], None]
+    ) -> None:
+        """Empty until the first scene.
+
+        Args:
+            config: gives the node's current planner parameters (called on each rebuild).
+            log: ``log(level, line)`` with level ``'info'`` or ``'warning'`` (the node's logger).
+        """
+        self._config, self._log = config, log
+        self._lock = threading.Lock()  # swaps of the planner (held for an assignment only)
+        self._plan_lock = threading.Lock()  # held while planning: one STPIK state per planner
+        self._waiting = threading.BoundedSemaphore(MAX_WAITING_PLANS)
+        self._scene_lock = threading.Lock()  # one /scene handled at a time
+        self._executing = False  # under self._lock
+        self._deferred_scene: Any = None  # under self._lock
+        self._planner: MotionPlanner | None = None
+        self._scene_error = ''
+        self._geometry: tuple | None = None
+        self._original: dict[str, ObjectSpec] = {}  # objects as last seen IN_CLUTTER
+
+    def reconfigure(self, config: PlannerConfig) -> None:
+        """Rebuild the planner of the current scene with ``config`` (cache emptied)."""
+        with self._lock:
+            if self._planner is not None:
+                self._planner = MotionPlanner(self._planner.scenario, config)
+
+    def on_scene(self, msg: Any) -> None:
+        """Take a decoded /scene message: rebuild the planner if the scene changed.
+
+        Deferred while an execution runs (the carried object moves with every message).
+        """
+        with self._lock:
+            if self._executing:
+                self._deferred_scene = msg
+                return
+        with self._scene_lock:
+            self._rebuild(msg)
+
+    def _rebuild(self, msg: Any) -> None:
+        try:
+            scenario = scenario_from_msg(msg, original=self._original)
+            geometry = (scenario.name, scenario.objects, scenario.drop_zone_center)
+            if geometry == self._geometry:
+                return
+            planner = MotionPlanner(scenario, self._config())
+            self._scene_error = ''
+        except (MotionPlannerError, ValueError) as err:  # ScenarioError is a ValueError
+            planner, self._scene_error, geometry = None, str(err), None
+            self._log('warning', f'scene rejected: {err}')
+        with self._lock:
+            self._planner, self._geometry = planner, geometry
+        self._original = {o.id: o for o in scenario.objects} if planner else {}
+        if planner is not None:
+            self._log('info', f'scene {msg.scenario_name!r}: planner rebuilt')
+
+    def answer(self, object_id: str, relocated: list[str], received: float, wait_s: float):
+        """Validate and answer from the cache at once; plan (waiting for the planner) if needed.
+
+        Args:
+            received: ``time.monotonic()`` of the request [s].
+            wait_s: longest wait for the planner from ``received`` (``request_timeout_s``) [s].
+        """
+        planner = self._planner
+        if planner is None:
+            return self._no_planner()
+        answer = planner.precheck(object_id, relocated)
+        if answer is not None:
+            return answer
+        if not self._waiting.acquire(blocking=False):
+            busy = f'planner busy: {MAX_WAITING_PLANS} requests are already waiting for it'
+            return PlanResult(False, Reason.PLANNER_BUSY, busy)
+        try:
+            remaining_s = max(0.0, received + wait_s - time.monotonic())
+            if not self._plan_lock.acquire(timeout=remaining_s):
+                busy = f'planner busy: not free within request_timeout_s={wait_s:.1f} s'
+                return PlanResult(False, Reason.PLANNER_BUSY, busy)
+            try:
+                planner = self._planner  # the scene may have changed while waiting
+                if planner is None:
+                    return self._no_planner()
+                return planner.check(object_id, relocated)  # may now be in the cache
+            finally:
+                self._plan_lock.release()
+        finally:
+            self._waiting.release()
+
+    def _no_planner(self) -> PlanResult:
+        reason = Reason.INVALID_SCENE if self._scene_error else Reason.NO_SCENE
+        return PlanResult(False, reason, self._scene_error or 'no /scene received yet')
+
+    def execute(
+        self, result: PlanResult, follow: Callable[[PlanResult], PlanResult]
+    ) -> PlanResult:
+        """``follow(result)`` unless another execution runs; then the scene deferred meanwhile."""
+        with self._lock:
+            busy, self._executing = self._executing, True
+        if busy:
+            failed = 'another relocation is being executed'
+            return dataclasses.replace(
+                result, feasible=False, reason=Reason.EXECUTION_FAILED, message=failed
+            )
+        try:
+            return follow(result)
+        finally:
+            with self._lock:
+                self._executing = False
+                deferred, self._deferred_scene = self._deferred_scene, None
+            if deferred is not None:
+                self.on_scene(deferred)
