@@ -53,6 +53,9 @@ SETTLE_SMOOTHING = 0.2  # weight of the newest error in the settling average [-]
 SETTLE_M = 0.02
 
 
+STALL_RATE = 0.05  # reference time advancing slower than this share of real time: stalled
+
+
 class ExecutionStopped(MotionPlannerError):  # noqa: N818
     """The closed loop stopped the arm; ``cause`` says which check failed.
 
@@ -323,7 +326,13 @@ class ClosedLoopController:
         dq, active = self.stpik.solve(k)
         if error_m > c.max_tracking_error_m or error_rad > c.max_tracking_error_rad:
             raise ExecutionStopped('tracking', self._lost_message(k, error_m, error_rad, active))
-        self._stalled_s = self._stalled_s + c.period if rate == 0.0 else 0.0
+        # Stalled while the reference (nearly) stands still; moving again only pays the stall back
+        # tick for tick, so a limit cycle (held by a set-based task, creeping on a few ticks)
+        # still ends with a stop instead of resetting the count forever.
+        if rate < STALL_RATE:
+            self._stalled_s += c.period
+        else:
+            self._stalled_s = max(0.0, self._stalled_s - c.period)
         if self._stalled_s > c.settle_timeout_s:
             raise ExecutionStopped(
                 'tracking',

@@ -38,6 +38,7 @@ from stpik_motion_planner.cartesian_path import (
     HAND_CENTRE_M,
     CartesianPath,
     CartesianSampler,
+    approach_yaws,
     grasp_rotation,
     interpolate,
 )
@@ -54,14 +55,6 @@ from stpik_motion_planner.exceptions import (
     SceneCollision,
     SelfCollision,
     VerificationFailed,
-)
-from stpik_motion_planner.grasp_choice import (
-    candidate_yaws,
-    carry_height,
-    converge_first,
-    grasp_height,
-    pregrasp_seeds,
-    transit_raised,
 )
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.scene_checks import validate_request, validate_scenario
@@ -125,7 +118,8 @@ class MotionPlanner:
         answer = self.precheck(object_id, relocated)
         if answer is not None:
             return answer
-        result = self.blockers.check(object_id, relocated)  # sweep-first, with blockers
+        result = self.plan(object_id, relocated)
+        result = self.blockers.annotate(result, object_id, relocated)  # infeasible: who blocks
         if result.reason != Reason.TIMEOUT:  # a timeout may pass on a quieter machine
             self.cache.put(object_id, relocated, result)
         return result
@@ -200,7 +194,7 @@ class MotionPlanner:
         failures: list[MotionPlannerError] = []
         try:
             if yaws is None:
-                yaws = candidate_yaws(centre, c)
+                yaws = approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad)
             for yaw in yaws:
                 t0 = time.perf_counter()
                 path = self._sample(sampler, scene, obj, yaw, slot, slot_yaw, failures)
@@ -255,7 +249,10 @@ class MotionPlanner:
         rotation = grasp_rotation(yaw)
         axis = rotation[:, 2]
         centre = np.asarray(obj.position, dtype=float)
-        grasp_z = grasp_height(obj, c.obstacle_activation_m, c.obstacle_min_distance_m)
+        half = obj.height / 2 if obj.shape == 'cylinder' else obj.size[2] / 2
+        # Mid-height, raised on short objects so the hand keeps its margin to the table.
+        low = centre[2] - half + HAND_HALF_HEIGHT_M + c.obstacle_activation_m + 0.005
+        grasp_z = min(max(centre[2], low), centre[2] + half - 0.01)
         grasp = pin.SE3(rotation, np.r_[centre[:2], grasp_z] + c.grasp_depth_m * axis)
         if not sampler.corridor_free(grasp):
             failures.append(
@@ -272,8 +269,10 @@ class MotionPlanner:
                 NoCartesianPath(obj.id, f'no free path to the pre-grasp at yaw {yaw:.2f} rad')
             )
             return None
-        carry_z = carry_height(  # over the neighbours, relocated ones too (see .grasp_choice)
-            self.scenario, obj, grasp.translation[2], c.lift_clearance_m, HAND_BELOW_EE_M
+        tops = [o.top_z for o in scene.objects.values() if o.role != 'static']
+        highest = max(tops, default=obj.position[2])
+        carry_z = max(
+            highest + c.lift_clearance_m + max(half, HAND_BELOW_EE_M), grasp.translation[2] + 0.05
         )
         lift = pin.SE3(rotation, np.r_[grasp.translation[:2], carry_z])
         slot = slot + np.r_[0.0, 0.0, grasp_z - centre[2]]  # EE height at release
@@ -323,13 +322,13 @@ class MotionPlanner:
             return [False] * (n - 1) + [True]
 
         try:
-            seeds = pregrasp_seeds(stpik, path.pregrasp, self.home_q[0], seed=self.config.seed)
+            seed = stpik.ready_posture(path.pregrasp.translation, self.home_q[0])
             # Until the grasp the object itself stands in the way of the arm.
             with_obj = SceneWorld([*scene.objects.values(), obj])
-            q_pre = converge_first(stpik, seeds, path.pregrasp, with_obj, deadline)
+            q_pre = stpik.converge(seed, path.pregrasp, with_obj, deadline=deadline)
             _outside_limit_band(q_pre, stpik, self.config.joint_limit_activation_rad)
             phase = 'transit to pre-grasp'
-            to_pre = transit_raised(stpik, self.home_q, q_pre, path.pregrasp, with_obj, deadline)
+            to_pre = self._transit_to_pregrasp(q_pre, path.pregrasp, with_obj, deadline)
             phase = 'approach'
             # Tight on every sample: the open fingertips pass 20 mm from the object (verifier).
             approach = stpik.track(
@@ -391,6 +390,25 @@ class MotionPlanner:
         grasp_index = sum(len(p) for p in parts[:3]) - 1
         release_index = sum(len(p) for p in parts) - 1
         return np.vstack([*parts, retreat]), grasp_index, release_index
+
+    def _transit_to_pregrasp(
+        self, q_pre: np.ndarray, pregrasp: pin.SE3, scene: SceneWorld, deadline: float
+    ) -> np.ndarray:
+        """Home → pre-grasp: a joint line, else a joint line to a pose above it and a descent.
+
+        The descent (:data:`HOVER_M`, Cartesian, STPIK) keeps the hand off the object whose top
+        a joint line swinging down onto the pre-grasp can clip.
+        """
+        stpik = self.stpik
+        try:
+            return stpik.transit(self.home_q, q_pre, scene, deadline)
+        except (SceneCollision, SelfCollision):
+            hover = pin.SE3(pregrasp.rotation, pregrasp.translation + np.r_[0.0, 0.0, HOVER_M])
+            q_hover = stpik.converge(q_pre, hover, scene, deadline=deadline)
+            down = interpolate(hover, pregrasp, self.config.step_m, self.config.step_rad)
+            to_hover = stpik.transit(self.home_q, q_hover, scene, deadline)
+            descent = stpik.track(q_hover, down, scene, [True] * len(down), deadline)
+            return np.vstack([to_hover, descent])
 
     def _success(
         self,

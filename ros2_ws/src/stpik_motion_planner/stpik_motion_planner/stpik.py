@@ -28,7 +28,6 @@ from stpik_motion_planner.exceptions import (
     SceneCollision,
     SelfCollision,
 )
-from stpik_motion_planner.grasp_choice import turned_joint
 from stpik_motion_planner.tasks import (
     EePoseTask,
     JointLimitTask,
@@ -157,7 +156,8 @@ class Stpik:
         """:data:`READY` turned to the azimuth of ``position`` [m], joint 1 nearest ``q1``."""
         reference = READY.copy()
         turned = READY[0] - math.atan2(position[1], position[0])
-        reference[0] = turned_joint(turned, q1, self.lower[0], self.upper[0])
+        turned += 2 * math.pi * round((q1 - turned) / (2 * math.pi))
+        reference[0] = turned
         return reference
 
     def reset_timers(self) -> None:
