@@ -197,6 +197,7 @@ def markdown(report: dict) -> str:
         '',
         '## Notes',
         '',
+        *([f'- **{report["note"]}**'] if report.get('note') else []),
         '- The plans move at `velocity_scale` = 0.5 of the joint velocity limits, so a 0.7× '
         'velocity limit does not bind and changes little in either mode.',
         '- Latency only delays the open-loop motion (same end point, larger error vs the '

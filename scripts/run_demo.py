@@ -25,14 +25,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from demo_goal import DemoError, retrieve_target
 from orchestration import LaunchError, NodeProcess, start_node, stop_all
 
 POLICIES = ('RND', 'LRND', 'H-LRND', 'H-EG', 'H-EG-SET', 'H-EG-SET-PLAIN')
 READY_TIMEOUT_S = 60.0
-
-
-class DemoError(RuntimeError):
-    """The demo cannot go on (a node died, the goal was rejected or failed)."""
 
 
 @dataclass(frozen=True)
@@ -151,95 +148,6 @@ def start_graph(args: argparse.Namespace, files: RunFiles) -> list[NodeProcess]:
         stop_all(nodes)
         raise
     return nodes
-
-
-def check_alive(nodes: list[NodeProcess]) -> None:
-    """Raise DemoError naming the first node that is no longer running."""
-    for node in nodes:
-        if not node.alive():
-            tail = '\n'.join(node.log_text().splitlines()[-15:])
-            raise DemoError(
-                f'node {node.name} died (exit code {node.process.returncode}); last output:\n'
-                f'{tail}'
-            )
-
-
-def retrieve_target(args: argparse.Namespace, nodes: list[NodeProcess]) -> Any:
-    """Send the RetrieveTarget goal, show progress from its feedback, return the result."""
-    import rclpy
-    from qtree_msgs.action import RetrieveTarget
-    from rclpy.action import ActionClient
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-    rclpy.init()
-    node = rclpy.create_node('qtree_demo')
-    try:
-        client = ActionClient(node, RetrieveTarget, '/retrieve_target')
-        deadline = time.monotonic() + args.timeout
-        while not client.wait_for_server(timeout_sec=0.5):
-            check_alive(nodes)
-            if time.monotonic() > deadline:
-                raise DemoError('the /retrieve_target action server did not appear')
-        goal = RetrieveTarget.Goal(
-            policy=args.policy,
-            seed=args.seed,
-            max_episodes=args.max_episodes,
-            execute=not args.no_execute,
-        )
-        columns = (
-            TextColumn('[bold]{task.description}'),
-            BarColumn(),
-            TextColumn('{task.fields[status]}'),
-            TimeElapsedColumn(),
-        )
-        with Progress(*columns, transient=False) as progress:
-            task = progress.add_task(
-                f'training {args.policy} on {args.scenario}',
-                total=args.max_episodes,
-                status='waiting for the first episode',
-            )
-
-            plain = not sys.stdout.isatty()  # CI, pipes: plain lines instead of a live bar
-            last_line = [0.0]
-
-            def on_feedback(message: Any) -> None:
-                fb = message.feedback
-                best = ' → '.join(fb.best_sequence) or '-'
-                status = (
-                    f'ep {fb.episode}  nodes {fb.nodes}  MP calls {fb.mp_calls}  '
-                    f'Q̄ {fb.q_bar:.1f}  ε {fb.epsilon:.3g}  best {best}'
-                )
-                progress.update(task, completed=fb.episode, status=status)
-                if plain and time.monotonic() - last_line[0] > 2.0:
-                    last_line[0] = time.monotonic()
-                    print(f'training: {status}', flush=True)
-
-            goal_future = client.send_goal_async(goal, feedback_callback=on_feedback)
-            handle = _spin_until_done(node, goal_future, nodes, deadline)
-            if not handle.accepted:
-                raise DemoError('the task planner rejected the goal')
-            result_future = handle.get_result_async()
-            wrapped = _spin_until_done(node, result_future, nodes, deadline)
-            progress.update(task, completed=args.max_episodes, status='done')
-        return wrapped.result
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-
-
-def _spin_until_done(node: Any, future: Any, nodes: list[NodeProcess], deadline: float) -> Any:
-    import rclpy
-    from rclpy.executors import ExternalShutdownException
-
-    while not future.done():
-        try:
-            rclpy.spin_once(node, timeout_sec=0.1)
-        except ExternalShutdownException:  # rclpy's SIGINT handler shut the context down
-            raise KeyboardInterrupt from None
-        check_alive(nodes)
-        if time.monotonic() > deadline:
-            raise DemoError('timed out waiting for the task planner (see --timeout)')
-    return future.result()
 
 
 def report(result: Any) -> None:

@@ -104,7 +104,7 @@ def test_scene_with_200_objects(g: ClientGraph, tmp_path: Path) -> None:
     ]:
         request = RelocateObject.Request(object_id=object_id, relocated_ids=relocated)
         answer, times[object_id, len(relocated)] = g.timed_call(g.relocate_client, request, 60.0)
-        assert answer.reason in {0, 201, 202, 203, 204, 205, 301}, answer.message
+        assert answer.reason in {0, *range(201, 210), 301}, answer.message
     growth = _report(
         f'200 objects: planner rebuilt in {rebuilt_s:.2f} s, 4 checks',
         g.nodes[PLANNER],
@@ -112,7 +112,7 @@ def test_scene_with_200_objects(g: ClientGraph, tmp_path: Path) -> None:
         sum(times.values()),
     )
     print(f'[limits]   check times [s]: { {k: round(v, 3) for k, v in times.items()} }')
-    assert max(times.values()) < 2.0 + 5.0  # time_limit_s + transport
+    assert max(times.values()) < 5.0 + 5.0  # time_limit_s + transport
     assert growth < RSS_GROWTH_MB
     assert g.timed_call(g.reset_client, ResetScene.Request(scenario='s1'), 30.0)[0].success
     assert g.spin_until(lambda: len(g.scene.objects) == 7, 10.0)

@@ -5,8 +5,10 @@ KINOVA_FACTS.md; its joints 1, 3, 5 and 7 are
 ``continuous`` as in kinova-ros. Pinocchio turns a continuous joint into a unit-circle joint with
 nq = 2 (cos θ, sin θ) and nv = 1, which breaks the plain ``q ∈ ℝ^7`` arithmetic of the STPIK
 planner (eq. 6 integrates q̇ ∈ ℝ^7 into q). The loader therefore rewrites every continuous joint
-as a revolute joint with limits ±2π [rad] before building the Pinocchio model, so that nq == nv.
-±2π covers every Kinova angle in use (Home has q1 = 4.71, q7 = 4.88) and bounds cable wind-up.
+as a revolute joint with limits ±4π [rad] before building the Pinocchio model, so that nq == nv.
+±4π is far beyond any motion from Kinova's Home (q1 = 4.71, q7 = 4.88): the STPIK planner treats
+these joints as unbounded (no limit task, no limit check) and the simulator's integrator, which
+clamps at these limits, then never clamps a planned motion.
 
 Two models are offered:
 
@@ -39,7 +41,7 @@ EE_FRAME = f'{PREFIX}end_effector'
 # MoveIt SRDF "Home" [rad]; EE ≈ (0.266, -0.212, 0.503) m.
 HOME = np.array([4.71, 2.84, 0.0, 0.75, 4.62, 4.48, 4.88])
 CANDLE = np.full(7, math.pi)  # "Vertical": arm straight up [rad]
-CONTINUOUS_LIMIT = 2.0 * math.pi  # limits given to continuous joints [rad]
+CONTINUOUS_LIMIT = 4.0 * math.pi  # limits given to continuous joints [rad]
 FINGER_MAX = 1.51  # proximal finger upper limit [rad]
 FINGER_OPEN = 0.2  # MoveIt "Open" [rad]
 
@@ -72,7 +74,7 @@ def urdf_text() -> str:
 
 
 def planning_urdf(text: str) -> str:
-    """Rewrite every ``continuous`` joint as ``revolute`` with limits ±2π (see module docstring).
+    """Rewrite every ``continuous`` joint as ``revolute`` with limits ±4π (see module docstring).
 
     Args:
         text: URDF XML text.
@@ -130,8 +132,16 @@ def link_parents() -> dict[str, str]:
 
 
 @functools.cache
+def continuous_joints() -> tuple[bool, ...]:
+    """Per arm joint (in :data:`ARM_JOINTS` order): True when the URDF joint is continuous."""
+    root = ET.fromstring(urdf_text())
+    kinds = {j.get('name'): j.get('type') for j in root.iter('joint')}
+    return tuple(kinds.get(name) == 'continuous' for name in ARM_JOINTS)
+
+
+@functools.cache
 def arm_limits() -> JointLimits:
-    """Limits of the 7 arm joints as the planning model sees them (continuous → ±2π)."""
+    """Limits of the 7 arm joints as the planning model sees them (continuous → ±4π)."""
     model = _full_models()[0]
     idx = [model.joints[model.getJointId(n)].idx_q for n in ARM_JOINTS]
     return JointLimits(

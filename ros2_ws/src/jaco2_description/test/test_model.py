@@ -93,8 +93,8 @@ def test_limits_from_urdf(robot: Jaco2Model) -> None:
     lim = robot.limits
     np.testing.assert_allclose(lim.lower[[1, 3, 5]], [0.820305, 0.523599, 1.134464])
     np.testing.assert_allclose(lim.upper[[1, 3, 5]], [5.462881, 5.759587, 5.148721])
-    np.testing.assert_allclose(lim.lower[[0, 2, 4, 6]], -2 * PI)
-    np.testing.assert_allclose(lim.upper[[0, 2, 4, 6]], 2 * PI)
+    np.testing.assert_allclose(lim.lower[[0, 2, 4, 6]], -4 * PI)  # continuous: far bounds
+    np.testing.assert_allclose(lim.upper[[0, 2, 4, 6]], 4 * PI)
     np.testing.assert_allclose(lim.velocity, [0.6283] * 4 + [0.8378] * 3)
     assert np.all((lim.lower <= HOME) & (lim.upper >= HOME))
 

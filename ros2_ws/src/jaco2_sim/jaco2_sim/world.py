@@ -2,7 +2,10 @@
 
 An attached object keeps the pose it had relative to the end-effector at the moment of the
 attach: transform_object_to_ee = ee_pose⁻¹ · object_pose, and after each EE motion
-object_pose = ee_pose · transform_object_to_ee. A detached object stays where it is.
+object_pose = ee_pose · transform_object_to_ee. A detached object stays where it is, except
+that an object released as ``'relocated'`` near its drop slot (the k-th relocation, slot k of
+:func:`qtree_scene.placement.drop_slots`) is stood upright on that slot: the planner plans later
+motions against exactly those poses.
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 from qtree_node_support.text import quote
+from qtree_scene.placement import settle_pose
 from qtree_scene.scene import ObjectSpec, Scenario, Status
 
 from jaco2_sim.exceptions import WorldError
@@ -134,6 +138,14 @@ class World:
             raise WorldError(
                 f'release status must be one of {RELEASE_STATUSES}, got {quote(status)}'
             )
+        if status == 'relocated':
+            index = sum(other.status == 'relocated' for other in self.objects.values())
+            yaw = math.atan2(state.pose.rotation[1, 0], state.pose.rotation[0, 0])
+            settled = settle_pose(self.scenario, index, state.spec, state.pose.translation, yaw)
+            if settled is not None:
+                cos, sin = math.cos(settled[1]), math.sin(settled[1])
+                rotation = np.array([[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]])
+                state.pose = pin.SE3(rotation, settled[0])
         state.status = status
         self.attached_id = None
         self.version += 1

@@ -84,6 +84,21 @@ def test_reset(world: World) -> None:
     np.testing.assert_allclose(world.state('O3').pose.translation, start)
 
 
+def test_relocated_object_released_near_its_slot_stands_upright_on_it(world: World) -> None:
+    from qtree_scene.placement import slot_position
+
+    obj = world.state('O2').spec
+    slot = slot_position(world.scenario, 0, obj)
+    tilted = pin.SE3(pin.rpy.rpyToMatrix(0.05, -0.03, 0.4), slot + np.array([0.01, 0.02, 0.01]))
+    world.attach('O2', tilted)  # EE at the object's pose: offset identity after the move
+    world.update(tilted * world._object_to_ee.inverse() * world._object_to_ee)
+    world.objects['O2'].pose = tilted
+    world.detach('O2')
+    pose = world.state('O2').pose
+    np.testing.assert_allclose(pose.translation, slot, atol=1e-12)
+    np.testing.assert_allclose(pose.rotation[:, 2], [0.0, 0.0, 1.0], atol=1e-12)
+
+
 def test_huge_ids_are_quoted_short(world: World) -> None:
     with pytest.raises(WorldError, match=r"unknown object 'xxxx.*…' \(10000 characters\)") as err:
         world.attach('x' * 10_000, pin.SE3.Identity())  # was echoed in full (#18)

@@ -214,6 +214,9 @@ class Execution(TrajectoryExecution):
                 return
             silence_s = self._node.get_parameter('joint_state_timeout_s').value
             silent = time.monotonic() - max(self.state_time, self._started)
+            if self._canceled.is_set():  # ~/cancel_execution (the sim got an empty trajectory)
+                self._stop_locked('execution canceled')
+                return
             if self._state_error:
                 self._stop_locked(f'bad /joint_states: {self._state_error}')
                 return

@@ -7,6 +7,7 @@ where nothing is near costs one broad-phase traversal in C++.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -126,13 +127,43 @@ def _probe_first(p: Proximity) -> Proximity:
 class RobotBodies:
     """The arm's collision primitives (from the Pinocchio ``GeometryModel``) as fcl objects.
 
-    Bodies are grouped so that every cross pair of a self-hit query is a pair of
-    ``Jaco2Model.self_collision_pairs`` (no adjacent links), see the module constants. The
-    broad-phase managers are built once and updated after each :meth:`place`.
+    Self-hit queries run on one broad-phase manager of every body and keep exactly the pairs of
+    ``self_pairs`` (``Jaco2Model.self_collision_pairs``), plus the carried object against every
+    link but the hand that holds it (link 7, fingers). The managers are built once and updated
+    after each :meth:`place`.
     """
 
-    def __init__(self, geometry_model: pin.GeometryModel, link_names: list[str]) -> None:
+    def __init__(
+        self,
+        geometry_model: pin.GeometryModel,
+        link_names: list[str],
+        self_pairs: Iterable[tuple[int, int]] | None = None,
+    ) -> None:
+        """Args:
+        geometry_model: the robot's collision geometry.
+        link_names: link of each geometry (index = geometry index).
+        self_pairs: geometry index pairs checked for self-hits (default: the cross pairs of
+            the module's link groups, the previous behaviour).
+        """
         self.link_names = list(link_names)
+        if self_pairs is None:
+            groups = ((_DISTAL, _PROXIMAL), (('link_4',), _FOREARM_PROXIMAL), (_HAND, _WRIST))
+            short = [_short(n) for n in self.link_names]
+            self_pairs = [
+                (i, j)
+                for i in range(len(short))
+                for j in range(i + 1, len(short))
+                if any(
+                    (short[i] in a and short[j] in b) or (short[i] in b and short[j] in a)
+                    for a, b in groups
+                )
+            ]
+        self._allowed = {
+            frozenset((self.link_names[i], self.link_names[j])) for i, j in self_pairs
+        }
+        self._allowed |= {
+            frozenset(('attached', n)) for n in self.link_names if _short(n) not in _HAND
+        }
         self.names: dict[int, str] = {}
         self.bodies: list[fcl.CollisionObject] = []
         self._geometries: list[fcl.CollisionGeometry] = []
@@ -142,6 +173,7 @@ class RobotBodies:
             self._geometries.append(geometry)
             self.bodies.append(fcl.CollisionObject(geometry, fcl.Transform()))
         self.attached: fcl.CollisionObject | None = None
+        self.attached_radius = 0.0  # bounding radius of the carried object [m]
         self._attached_offset = pin.SE3.Identity()
         self._build_managers()
 
@@ -152,8 +184,21 @@ class RobotBodies:
         return out
 
     def _build_managers(self) -> None:
-        pairs = ((_DISTAL, _PROXIMAL), (('link_4',), _FOREARM_PROXIMAL), (_HAND, _WRIST))
-        self._self_pairs = [(_manager(self._group(a)), _manager(self._group(b))) for a, b in pairs]
+        # One (body, later partners) manager pair per body: their cross pairs are exactly the
+        # allowed self-hit pairs, so no distance is computed for adjacent or rigid pairs.
+        names = [*self.link_names, 'attached']
+        objects = [*self.bodies, self.attached]
+        self._self_pairs = []
+        for i, a in enumerate(names):
+            if objects[i] is None:
+                continue
+            partners = [
+                objects[j]
+                for j in range(i + 1, len(names))
+                if objects[j] is not None and frozenset((a, names[j])) in self._allowed
+            ]
+            if partners:
+                self._self_pairs.append((_manager([objects[i]]), _manager(partners)))
         keys = tuple(_short(n) for n in self.link_names if _short(n) not in _NOT_VS_SCENE)
         self._scene_manager = _manager(self._group((*keys, 'attached')))
         self._managers = [m for pair in self._self_pairs for m in pair] + [self._scene_manager]
@@ -174,6 +219,9 @@ class RobotBodies:
             geometry = fcl.Box(sx, sy, max(sz - 2 * settle_m, 1e-3))
         self.names[id(geometry)] = 'attached'
         self._attached_geometry = geometry
+        height = obj.height if obj.shape == 'cylinder' else obj.size[2]
+        across = obj.radius if obj.shape == 'cylinder' else 0.5 * math.hypot(*obj.size[:2])
+        self.attached_radius = math.hypot(across, height / 2)
         self.attached = fcl.CollisionObject(geometry, fcl.Transform())
         self._attached_offset = transform_obj_to_ee
         self._build_managers()
@@ -195,7 +243,7 @@ class RobotBodies:
             manager.update()
 
     def self_proximities(self, threshold: float) -> list[Proximity]:
-        """Non-adjacent body pairs closer than ``threshold`` [m] (three broad-phase queries)."""
+        """Pairs of the self-hit list closer than ``threshold`` [m] (one query per body)."""
         found: list[Proximity] = []
         for manager_a, manager_b in self._self_pairs:
             data = _Collector(self.names, threshold)

@@ -65,9 +65,9 @@ class PlannerConfig:
     obstacle_min_distance_m: float = 0.005
     step_m: float = 0.04
     step_rad: float = 0.15
-    max_iterations: int = 6
+    max_iterations: int = 12  # the Cartesian step bound needs more, shorter steps near bodies
     max_joint_step_rad: float = 0.3
-    time_limit_s: float = 2.0
+    time_limit_s: float = 5.0  # verification + Cartesian-bounded steps on a loaded 2-core machine
     sampling_time_s: float = 0.05
     seed: int = 0
     approach_directions: int = 5
@@ -75,7 +75,7 @@ class PlannerConfig:
     pregrasp_standoff_m: float = 0.1
     grasp_depth_m: float = 0.0
     lift_clearance_m: float = 0.04
-    retreat_m: float = 0.08
+    retreat_m: float = 0.1  # the hand ends ≥ 25 mm (activation) from the placed object
     hand_radius_m: float = 0.07
     hand_width_m: float = 0.11
     velocity_scale: float = 0.5

@@ -49,13 +49,15 @@ class IkNotConverged(MotionPlannerError):  # noqa: N818
 
     reason = Reason.IK_NOT_CONVERGED
 
-    def __init__(self, sample: int, residual_m: float, residual_rad: float) -> None:
+    def __init__(
+        self, sample: int, residual_m: float, residual_rad: float, detail: str = ''
+    ) -> None:
         self.sample = sample
         self.residual_m = residual_m
         self.residual_rad = residual_rad
         super().__init__(
             f'tracking error at sample {sample}: {residual_m * 1000:.1f} mm, '
-            f'{residual_rad:.3f} rad'
+            f'{residual_rad:.3f} rad' + (f' ({detail})' if detail else '')
         )
 
 
@@ -96,6 +98,29 @@ class SceneCollision(MotionPlannerError):  # noqa: N818
         self.object_id = object_id
         self.distance_m = distance_m
         super().__init__(f'{link} hits {object_id!r}: distance {distance_m * 1000:.1f} mm')
+
+
+class VerificationFailed(MotionPlannerError):  # noqa: N818
+    """The independent verifier (:mod:`.verifier`) rejected a trajectory STPIK accepted."""
+
+    reason = Reason.VERIFICATION_FAILED
+
+    def __init__(self, detail: str, carried: bool = False) -> None:
+        if carried:
+            self.reason = Reason.CARRIED_COLLISION
+        super().__init__(f'trajectory rejected by the verifier: {detail}')
+
+
+class NoPlacement(MotionPlannerError):  # noqa: N818
+    """No drop slot is left for the object (see ``qtree_scene.placement``)."""
+
+    reason = Reason.NO_PLACEMENT
+
+
+class ObjectTooBig(MotionPlannerError):  # noqa: N818
+    """The object does not fit between the fingers of the open hand."""
+
+    reason = Reason.OBJECT_TOO_BIG
 
 
 class PlanningTimeout(MotionPlannerError):  # noqa: N818

@@ -2,10 +2,8 @@
 
 Kept apart from :mod:`.planner` so that the planner's own code changes little:
 
-* :func:`carry_height`: the lift clears the objects near the grasped one (relocated ones
-  included, so that a motion planned without them also clears them), not the tallest object of
-  the whole table: lifting a front-row object as high as the tallest object far away folds the
-  elbow past its limit.
+* :func:`carry_height`: the lift clears the objects near the way to the drop zone (relocated
+  ones included), not the tallest object of the whole table.
 * :func:`candidate_yaws`: two more approach yaws, wider around the object.
 * :func:`grasp_height`: the hand's lowest point, not its half height, is kept off the table.
 * :func:`transit_raised`: a detour above the pre-grasp when the straight joint move dips.
@@ -77,11 +75,17 @@ def grasp_height(obj: ObjectSpec, activation_m: float, min_distance_m: float) ->
 def carry_height(
     scenario: Scenario, obj: ObjectSpec, grasp_z: float, clearance: float, hand_below: float
 ) -> float:
-    """EE height [m] of the lift: the carried object's bottom ``clearance`` [m] above the
-    neighbours' tops, and the hand ``hand_below`` [m] below the EE above them too.
+    """EE height [m] of the lift: the carried object's bottom ``clearance`` [m] above the tops
+    of the objects near its way to the drop zone, and the hand ``hand_below`` [m] below the EE
+    above them too.
+
+    "Near its way": footprint centre within :data:`LIFT_NEIGHBOURHOOD_M` of the segment from
+    the object to the drop-zone centre (table plane), relocated objects included so that a
+    motion planned without them also clears them. Far objects are not lifted over: lifting a
+    front-row object as high as the tallest object of the table folds the elbow past its limit.
 
     Args:
-        scenario: the whole scene (relocated objects are counted as neighbours).
+        scenario: the whole scene.
         obj: the grasped object.
         grasp_z: EE height at the grasp [m].
         clearance: wanted gap under the carried object [m].
@@ -89,14 +93,23 @@ def carry_height(
     """
     half = obj.height / 2 if obj.shape == 'cylinder' else obj.size[2] / 2
     below = max(grasp_z - (obj.position[2] - half), hand_below)  # object bottom under the EE
-    centre = np.asarray(obj.position[:2])
+    start = np.asarray(obj.position[:2], dtype=float)
+    end = np.asarray(scenario.drop_zone_center[:2], dtype=float)
     tops = [
         o.top_z
         for o in scenario.objects
         if o.role != 'static'
-        and float(np.linalg.norm(np.asarray(o.position[:2]) - centre)) <= LIFT_NEIGHBOURHOOD_M
+        and _segment_distance(np.asarray(o.position[:2], dtype=float), start, end)
+        <= LIFT_NEIGHBOURHOOD_M
     ]
     return max(max(tops, default=obj.top_z) + clearance + below, grasp_z + 0.05)
+
+
+def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    """Distance [m] from point ``p`` to the segment ``a``–``b`` (all (2,))."""
+    ab = b - a
+    t = float(np.clip((p - a) @ ab / max(float(ab @ ab), 1e-12), 0.0, 1.0))
+    return float(np.linalg.norm(p - a - t * ab))
 
 
 def turned_joint(value: float, q1: float, lower: float, upper: float) -> float:

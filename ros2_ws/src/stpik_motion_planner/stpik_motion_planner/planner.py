@@ -1,8 +1,16 @@
 """The motion planner: validates a relocation request, samples the Cartesian path, runs the STPIK
 check and caches the answer (paper Sect. 3.1, Figure 2). No ROS import.
 
-With Assumption 2 the objects already relocated are simply removed from the scene, so a check
-depends only on ``(frozenset(relocated_ids), object_id)`` (see :mod:`.cache`).
+Relocated objects leave the clutter and stand in the drop slots of :mod:`qtree_scene.placement`
+(the k-th relocation uses slot k, the simulator stands them there too). A check for object o
+after the set R plans against: the objects not in R ∪ {o} at their initial poses, and one
+conservative envelope per occupied slot 0 … |R|−1 (largest radius and height over R, plus
+:data:`ENVELOPE_MARGIN_M`). Both depend on the SET R only, never on the order R was relocated
+in, so the answer keyed on ``(frozenset(R), o)`` in :mod:`.cache` stays valid (Assumption 2,
+made true by construction; slot k's placement never touches slots < k, see
+:func:`qtree_scene.placement.drop_slots`). Every trajectory returned has passed the independent
+:class:`~.verifier.TrajectoryVerifier` against that scene; a rejection is a planner defect and
+is answered ``VERIFICATION_FAILED`` / ``CARRIED_COLLISION``, never returned.
 """
 
 from __future__ import annotations
@@ -16,6 +24,12 @@ import numpy as np
 import pinocchio as pin
 from jaco2_description.model import Jaco2Model
 from ompl import util as ou
+from qtree_scene.placement import (
+    PLACEMENT_TOLERANCE_M,
+    drop_slots,
+    occupied_envelopes,
+    slot_position,
+)
 from qtree_scene.scene import ObjectSpec, Scenario
 
 from stpik_motion_planner.blockers import BlockerFinder
@@ -31,9 +45,15 @@ from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import (
     InvalidRequest,
+    JointLimitViolated,
     MotionPlannerError,
     NoCartesianPath,
+    NoPlacement,
+    ObjectTooBig,
     PlanningTimeout,
+    SceneCollision,
+    SelfCollision,
+    VerificationFailed,
 )
 from stpik_motion_planner.grasp_choice import (
     candidate_yaws,
@@ -46,11 +66,18 @@ from stpik_motion_planner.grasp_choice import (
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.scene_checks import validate_request, validate_scenario
 from stpik_motion_planner.stpik import Stpik
+from stpik_motion_planner.verifier import Carried, TrajectoryVerifier
 
 HAND_BELOW_EE_M = 0.06  # lowest point of the hand below the EE origin in a side grasp [m]
 HAND_HALF_HEIGHT_M = 0.0525  # half the hand's extent across the approach axis [m]
 CARRY_MIN_Z_M = 0.3  # lowest EE height of the carry transit [m]
 MIN_SEGMENT_S = 0.05  # shortest time between two trajectory samples [s]
+# The simulator stands placed objects on their slot (qtree_scene.placement.settle_pose) [m].
+ENVELOPE_MARGIN_M = PLACEMENT_TOLERANCE_M
+# Widest object the open hand closes on: inner faces of the open fingertips are ±0.046 m from the
+# EE origin (URDF, fingers at 0.2 rad), minus 5 mm clearance on each side [m].
+HAND_OPENING_M = 0.082
+HOVER_M = 0.12  # height above the pre-grasp of the descent when the joint line is blocked [m]
 _OMPL_SEEDED: list[int] = []
 
 
@@ -80,6 +107,7 @@ class MotionPlanner:
         self.config = config if config is not None else PlannerConfig()
         self.robot = model if model is not None else Jaco2Model()
         self.stpik = Stpik(self.robot, self.config)
+        self.verifier = TrajectoryVerifier(self.robot)
         self.cache = FeasibilityCache()
         self.blockers = BlockerFinder(self)
         self.home_q = np.asarray(scenario.home, dtype=float)
@@ -118,17 +146,24 @@ class MotionPlanner:
         return None
 
     def slot_position(self, index: int, obj: ObjectSpec) -> np.ndarray:
-        """Centre [m] (3,) of ``obj`` standing in drop-zone slot ``index`` (grid, wraps)."""
-        centre = np.asarray(self.scenario.drop_zone_center, dtype=float)
-        size = np.asarray(self.scenario.drop_zone_size, dtype=float)
-        spacing = self.config.slot_spacing_m
-        nx = max(1, int(size[0] // spacing))
-        ny = max(1, int(size[1] // spacing))
-        i, j = divmod(index % (nx * ny), ny)
-        x = centre[0] + (i - (nx - 1) / 2) * spacing
-        y = centre[1] + (j - (ny - 1) / 2) * spacing
-        half = obj.height / 2 if obj.shape == 'cylinder' else obj.size[2] / 2
-        return np.array([x, y, centre[2] - size[2] / 2 + half])
+        """Centre [m] (3,) of ``obj`` standing in drop slot ``index`` (qtree_scene.placement)."""
+        return slot_position(self.scenario, index, obj)
+
+    def planning_scene(
+        self, object_id: str, relocated: Iterable[str], envelopes: bool = True
+    ) -> list[ObjectSpec]:
+        """Bodies standing while ``object_id`` is relocated after the set ``relocated``.
+
+        The objects not relocated (initial poses, statics included; not ``object_id``) and, with
+        ``envelopes``, one envelope per occupied drop slot
+        (:func:`qtree_scene.placement.occupied_envelopes`).
+        """
+        relocated = set(relocated)
+        removed = relocated | {object_id}
+        standing = [o for o in self.scenario.objects if o.id not in removed]
+        if not envelopes:
+            return standing
+        return standing + occupied_envelopes(self.scenario, relocated, ENVELOPE_MARGIN_M)
 
     def plan(
         self,
@@ -137,17 +172,30 @@ class MotionPlanner:
         yaws: Sequence[float] | None = None,
         slot_index: int | None = None,
     ) -> PlanResult:
-        """Plan without the cache (the request must be valid); ``yaws`` [rad] overrides the
-        candidate approach yaws, ``slot_index`` the drop slot (default ``len(relocated)``)."""
+        """Plan without the cache (the request must be valid).
+
+        Args:
+            object_id: the object to relocate.
+            relocated: the objects already relocated (gone from the clutter).
+            yaws: candidate approach yaws [rad] (default: the planner's own).
+            slot_index: drop slot to place in with no placed objects standing (the blocker
+                sweeps of :mod:`.blockers`); default: slot ``len(relocated)`` with the occupied
+                slots 0 … len(relocated)−1 standing as envelopes.
+        """
         c = self.config
         start = time.perf_counter()
         deadline = start + c.time_limit_s
-        timings = {'sampling': 0.0, 'stpik': 0.0, 'collision': 0.0}
+        timings = {'sampling': 0.0, 'stpik': 0.0, 'collision': 0.0, 'verify': 0.0}
         obj = self.scenario.object(object_id)
-        removed = set(relocated) | {object_id}
-        scene = SceneWorld(o for o in self.scenario.objects if o.id not in removed)
+        index = len(relocated) if slot_index is None else slot_index
+        bad = _unplaceable(self.scenario, obj, index)
+        if bad is not None:
+            return PlanResult(False, bad.reason, str(bad), planning_time=_since(start))
+        standing = self.planning_scene(object_id, relocated, envelopes=slot_index is None)
+        scene = SceneWorld(standing)
         sampler = CartesianSampler(scene, c)
-        slot = self.slot_position(len(relocated) if slot_index is None else slot_index, obj)
+        slot = self.slot_position(index, obj)
+        slot_yaw = drop_slots(self.scenario)[index].yaw
         centre = np.asarray(obj.position, dtype=float)
         failures: list[MotionPlannerError] = []
         try:
@@ -155,7 +203,7 @@ class MotionPlanner:
                 yaws = candidate_yaws(centre, c)
             for yaw in yaws:
                 t0 = time.perf_counter()
-                path = self._sample(sampler, scene, obj, yaw, slot, failures)
+                path = self._sample(sampler, scene, obj, yaw, slot, slot_yaw, failures)
                 timings['sampling'] += time.perf_counter() - t0
                 if path is None:
                     continue
@@ -167,6 +215,19 @@ class MotionPlanner:
                     raise
                 except MotionPlannerError as err:
                     failures.append(err)
+                    continue
+                t0 = time.perf_counter()
+                report = self.verifier.verify(
+                    trajectory, standing, Carried(obj, grasp_index, release_index)
+                )
+                timings['verify'] += time.perf_counter() - t0
+                if not report.ok:
+                    carried = any('carried' in (v.name_a, v.name_b) for v in report.violations)
+                    failures.append(
+                        VerificationFailed(
+                            f'yaw {path.approach_yaw:.2f} rad: {report.summary()}', carried
+                        )
+                    )
                     continue
                 return self._success(path, trajectory, grasp_index, release_index, start, timings)
             if time.perf_counter() > deadline:
@@ -187,6 +248,7 @@ class MotionPlanner:
         obj: ObjectSpec,
         yaw: float,
         slot: np.ndarray,
+        slot_yaw: float,
         failures: list,
     ) -> CartesianPath | None:
         c = self.config
@@ -217,8 +279,7 @@ class MotionPlanner:
         slot = slot + np.r_[0.0, 0.0, grasp_z - centre[2]]  # EE height at release
         step_m, step_rad = c.step_m, c.step_rad
         options = []
-        azimuth = math.atan2(slot[1], slot[0])
-        for place_yaw in (azimuth, azimuth + math.pi / 2, azimuth - math.pi / 2):
+        for place_yaw in (slot_yaw, slot_yaw + math.pi / 2, slot_yaw - math.pi / 2):
             place_rotation = grasp_rotation(place_yaw)
             above = pin.SE3(place_rotation, np.r_[slot[:2], max(carry_z, CARRY_MIN_Z_M)])
             place = pin.SE3(place_rotation, slot)
@@ -263,12 +324,16 @@ class MotionPlanner:
 
         try:
             seeds = pregrasp_seeds(stpik, path.pregrasp, self.home_q[0], seed=self.config.seed)
-            q_pre = converge_first(stpik, seeds, path.pregrasp, scene, deadline)
+            # Until the grasp the object itself stands in the way of the arm.
+            with_obj = SceneWorld([*scene.objects.values(), obj])
+            q_pre = converge_first(stpik, seeds, path.pregrasp, with_obj, deadline)
+            _outside_limit_band(q_pre, stpik, self.config.joint_limit_activation_rad)
             phase = 'transit to pre-grasp'
-            to_pre = transit_raised(stpik, self.home_q, q_pre, path.pregrasp, scene, deadline)
+            to_pre = transit_raised(stpik, self.home_q, q_pre, path.pregrasp, with_obj, deadline)
             phase = 'approach'
+            # Tight on every sample: the open fingertips pass 20 mm from the object (verifier).
             approach = stpik.track(
-                q_pre, path.approach, scene, loose_then_tight(len(path.approach)), deadline
+                q_pre, path.approach, scene, [True] * len(path.approach), deadline
             )
             world_obj = pin.SE3(
                 pin.rpy.rpyToMatrix(0.0, 0.0, obj.yaw), np.asarray(obj.position, dtype=float)
@@ -276,7 +341,7 @@ class MotionPlanner:
             stpik.bodies.attach(
                 obj,
                 path.approach[-1].actInv(world_obj),
-                settle_m=self.config.obstacle_min_distance_m + 0.002,
+                settle_m=self.config.obstacle_activation_m + 0.002,  # set down: rows inactive
             )
             phase = 'lift'
             lift = stpik.track(approach[-1], path.lift, scene, [False] * len(path.lift), deadline)
@@ -303,9 +368,18 @@ class MotionPlanner:
                 place[-1], retreat_leg, scene, [False] * len(retreat_leg), deadline
             )
             phase = 'return home'
-            retreat = np.vstack(
-                [retreat, stpik.transit(retreat[-1], self.home_q, scene, deadline)]
-            )
+            placed = dataclasses.replace(obj, position=tuple(place_leg[-1].translation), yaw=0.0)
+            after = SceneWorld([*scene.objects.values(), placed])
+            try:
+                home = stpik.transit(retreat[-1], self.home_q, after, deadline)
+            except (SceneCollision, SelfCollision):
+                # Rise straight up first (Cartesian, STPIK), then the joint line home.
+                end = retreat_leg[-1]
+                up = pin.SE3(end.rotation, end.translation + np.r_[0.0, 0.0, HOVER_M])
+                leg = interpolate(end, up, self.config.step_m, self.config.step_rad)
+                rise = stpik.track(retreat[-1], leg, after, [False] * len(leg), deadline)
+                home = np.vstack([rise, stpik.transit(rise[-1], self.home_q, after, deadline)])
+            retreat = np.vstack([retreat, home])
         except MotionPlannerError as err:
             err.args = (f'{phase} at yaw {path.approach_yaw:.2f} rad: {err}',)
             raise
@@ -350,8 +424,42 @@ def _since(start: float) -> float:
     return time.perf_counter() - start
 
 
+def _outside_limit_band(q: np.ndarray, stpik: Stpik, band: float) -> None:
+    """Refuse a pre-grasp inside the joint-limit activation band (its tracker could not leave).
+
+    Raises:
+        JointLimitViolated: a limited joint within ``band`` [rad] of a limit.
+    """
+    margin = np.minimum(q - stpik.lower, stpik.upper - q)
+    j = int(np.argmin(margin))
+    if margin[j] < band:
+        err = JointLimitViolated(j, float(q[j]), stpik.lower[j], stpik.upper[j])
+        err.args = (f'{err} (pre-grasp within the {band:.2f} rad joint-limit activation band)',)
+        raise err
+
+
+def _unplaceable(scenario: Scenario, obj: ObjectSpec, index: int) -> MotionPlannerError | None:
+    """NO_PLACEMENT / OBJECT_TOO_BIG before any planning, else None."""
+    slots = drop_slots(scenario)
+    if index >= len(slots):
+        return NoPlacement(
+            f'no free drop slot for {obj.id!r}: relocation {index + 1} of a scene with room '
+            f'for {len(slots)} (qtree_scene.placement.drop_slots)'
+        )
+    width = 2 * obj.radius if obj.shape == 'cylinder' else min(obj.size[0], obj.size[1])
+    if width > HAND_OPENING_M:
+        return ObjectTooBig(
+            f'{obj.id!r} is {width * 1000:.0f} mm across, the open hand closes on at most '
+            f'{HAND_OPENING_M * 1000:.0f} mm'
+        )
+    return None
+
+
 def _most_informative(failures: list[MotionPlannerError], object_id: str) -> MotionPlannerError:
-    """The first STPIK failure if any direction reached STPIK, else the first sampling failure."""
+    """A verifier rejection first, else the first STPIK failure, else the first sampling one."""
+    for err in failures:
+        if isinstance(err, VerificationFailed):
+            return err
     for err in failures:
         if not isinstance(err, NoCartesianPath):
             return err

@@ -143,8 +143,10 @@ def verify_motion(
     object_id: str,
     result: PlanResult,
     robot: Jaco2Model,
+    step_rad: float = VERIFY_STEP_RAD,
 ) -> tuple[bool, str]:
-    """Check a feasible answer densely and independently (see the module docstring).
+    """Check a feasible answer densely and independently (see the module docstring), at most
+    ``step_rad`` [rad] of joint motion between two checked configurations.
 
     Returns:
         (valid, reason): reason names the first violation ('' when valid).
@@ -174,7 +176,7 @@ def verify_motion(
     links = [(n, o) for n, o in robot.fcl_objects() if not n.endswith(_SKIPPED_LINKS)]
     for index in range(1, len(q)):
         a, b = q[index - 1], q[index]
-        n = max(1, math.ceil(float(np.max(np.abs(b - a))) / VERIFY_STEP_RAD))
+        n = max(1, math.ceil(float(np.max(np.abs(b - a))) / step_rad))
         holding = result.grasp_index < index <= result.release_index
         for t in np.arange(1, n + 1) / n:
             qt = a + (b - a) * t

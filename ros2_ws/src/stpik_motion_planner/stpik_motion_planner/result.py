@@ -26,6 +26,10 @@ class Reason(IntEnum):
     JOINT_LIMIT = 203
     SELF_COLLISION = 204
     SCENE_COLLISION = 205
+    VERIFICATION_FAILED = 206
+    NO_PLACEMENT = 207
+    OBJECT_TOO_BIG = 208
+    CARRIED_COLLISION = 209
     TIMEOUT = 301
     EXECUTION_FAILED = 302
     PLANNER_BUSY = 303  # not planned: the queue was full; ask again later (#18)

@@ -17,7 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
-from jaco2_description.model import EE_FRAME, Jaco2Model
+from jaco2_description.model import EE_FRAME, Jaco2Model, continuous_joints
 
 from stpik_motion_planner.collision import RobotBodies, SceneWorld
 from stpik_motion_planner.config import PlannerConfig
@@ -41,6 +41,12 @@ from stpik_motion_planner.tasks import (
 from stpik_motion_planner.tasks.ee_pose_task import pose_error
 
 LOOSE_FACTOR = 3.0  # tolerance multiplier on intermediate path samples [-]
+LOOKAHEAD_M = 0.05  # pairs are found up to this beyond their activation distance [m]
+# converge stops when the error (position [m] + STALL_RAD_TO_M · orientation [rad]) is above
+# STALL_RATIO times its value STALL_WINDOW iterations earlier.
+STALL_WINDOW = 5
+STALL_RATIO = 0.95
+STALL_RAD_TO_M = 0.1
 # Posture of a low side grasp straight ahead (EE at about (0.6, 0, 0.08) m, approach along +x)
 # with wide joint-limit and self-hit margins, found offline by multi-start IK [rad]. Turning
 # joint 1 by -ψ turns it to azimuth ψ; the posture task pulls the arm toward that posture.
@@ -62,8 +68,25 @@ def damped_pinv(A: np.ndarray, damping: float, threshold: float) -> np.ndarray:
     return (Vt.T * s_inv) @ U.T
 
 
+RANK_TOLERANCE = 1e-6  # singular values below this are rank loss in the null-space projector [-]
+
+
+def truncated_pinv(A: np.ndarray, tolerance: float = RANK_TOLERANCE) -> np.ndarray:
+    """Undamped pseudo-inverse of A (m, n) → (n, m), singular values < ``tolerance`` dropped."""
+    if A.size == 0:
+        return np.zeros((A.shape[1], A.shape[0]))
+    U, S, Vt = np.linalg.svd(A, full_matrices=False)
+    s_inv = np.divide(1.0, S, out=np.zeros_like(S), where=tolerance <= S)
+    return (Vt.T * s_inv) @ U.T
+
+
 def solve_hierarchy(levels: Sequence[TaskRows], n: int, damping: float, threshold: float):
-    """Eq. (6): q̇_i = q̇_{i−1} + (J_i N_{i−1})^† (K_i σ̃_i − J_i q̇_{i−1}), N_i = N_{i−1} − (J_i N_{i−1})^† J_i N_{i−1}.
+    """Eq. (6): q̇_i = q̇_{i−1} + (J_i N_{i−1})^†_λ (K_i σ̃_i − J_i q̇_{i−1}), N_i = N_{i−1} − (J_i N_{i−1})^+ J_i N_{i−1}.
+
+    The velocity term uses the damped pseudo-inverse ^†_λ (:func:`damped_pinv`); the null-space
+    projector uses the undamped, rank-truncated ^+ (:func:`truncated_pinv`), so N_i is an exact
+    projector and a lower level never changes what a higher one achieves (strict priority), even
+    where damping acts.
 
     Args:
         levels: tasks in priority order (highest first), rows (J_i, K_i σ̃_i).
@@ -80,9 +103,8 @@ def solve_hierarchy(levels: Sequence[TaskRows], n: int, damping: float, threshol
         if rows.dim == 0:
             continue
         JN = rows.jacobian @ N
-        pinv = damped_pinv(JN, damping, threshold)
-        dq = dq + pinv @ (rows.error - rows.jacobian @ dq)
-        N = N - pinv @ JN
+        dq = dq + damped_pinv(JN, damping, threshold) @ (rows.error - rows.jacobian @ dq)
+        N = N - truncated_pinv(JN) @ JN
     return dq
 
 
@@ -99,9 +121,20 @@ class Stpik:
         self.data = self.model.createData()
         self.geometry_model = robot.geometry_model
         self.geometry_data = pin.GeometryData(self.geometry_model)
-        self.lower = np.asarray(robot.limits.lower, dtype=float)
-        self.upper = np.asarray(robot.limits.upper, dtype=float)
-        self.bodies = RobotBodies(self.geometry_model, robot.collision_links)
+        # Continuous joints (1, 3, 5, 7) have no limit: the model's ±2π is a modelling artefact.
+        free = np.asarray(continuous_joints())
+        self.lower = np.where(free, -np.inf, np.asarray(robot.limits.lower, dtype=float))
+        self.upper = np.where(free, np.inf, np.asarray(robot.limits.upper, dtype=float))
+        self.bodies = RobotBodies(
+            self.geometry_model, robot.collision_links, robot.self_collision_pairs
+        )
+        # Per body: parent joint and bounding radius [m], for the Cartesian step bound.
+        self._body_joint = np.array([g.parentJoint for g in self.geometry_model.geometryObjects])
+        self._body_radius = np.array(
+            [_bounding_radius(g.geometry) for g in self.geometry_model.geometryObjects]
+        )
+        self._body_index = {name: i for i, name in enumerate(robot.collision_links)}
+        self._body_index['attached'] = len(robot.collision_links)
         self.ee_frame = self.model.getFrameId(EE_FRAME)
         self.body_joint = {
             name: g.parentJoint
@@ -131,8 +164,10 @@ class Stpik:
         """Zero :attr:`collision_time`."""
         self.collision_time = 0.0
 
-    def kinematics(self, q: np.ndarray, scene: SceneWorld) -> Kinematics:
-        """Forward kinematics, Jacobians and close pairs at ``q`` [rad] (7,)."""
+    def kinematics(
+        self, q: np.ndarray, scene: SceneWorld, lookahead: float = LOOKAHEAD_M
+    ) -> Kinematics:
+        """Forward kinematics, Jacobians and pairs closer than activation + ``lookahead`` [m]."""
         pin.computeJointJacobians(self.model, self.data, q)
         pin.updateFramePlacements(self.model, self.data)
         pin.updateGeometryPlacements(
@@ -141,8 +176,12 @@ class Stpik:
         world_ee = self.data.oMf[self.ee_frame]
         start = time.perf_counter()
         self.bodies.place(self.geometry_data.oMg, world_ee)
-        self_pairs = self.bodies.self_proximities(self.config.self_activation_m)
-        scene_pairs = self.bodies.scene_proximities(scene, self.config.obstacle_activation_m)
+        # Pairs up to LOOKAHEAD_M beyond activation: tasks use those inside it, the step bound
+        # (:meth:`_step`) keeps the others from crossing the failure margin in one step.
+        self_pairs = self.bodies.self_proximities(self.config.self_activation_m + lookahead)
+        scene_pairs = self.bodies.scene_proximities(
+            scene, self.config.obstacle_activation_m + lookahead
+        )
         self.collision_time += time.perf_counter() - start
         return Kinematics(
             q,
@@ -156,29 +195,66 @@ class Stpik:
         )
 
     def solve(self, k: Kinematics) -> tuple[np.ndarray, list[str]]:
-        """One STPIK step at ``k``: joint step [rad] (7,) and the activated set-based tasks."""
+        """One STPIK step at ``k``: joint step [rad] (7,) and the activated set-based tasks.
+
+        Set-based activation (Di Lillo et al.): a row outside its valid set enters the hierarchy
+        when the current solution drives σ further out. Rows are added one round at a time and
+        the solution recomputed after each round, until no remaining row is pushed out by the
+        solution that includes every activated row (fix of a single test against the solution
+        without set-based tasks, which a later activation could invalidate).
+        """
         c = self.config
         ee = self.ee.compute(k)
         posture = self.posture.compute(k)
-        dq_free = solve_hierarchy([ee, posture], 7, c.damping, c.singular_threshold)
-        levels, active = [], []
+        dq = solve_hierarchy([ee, posture], 7, c.damping, c.singular_threshold)
+        candidates = []
         for task in (self.joint_limits, self.self_hit, self.obstacles):
             rows = task.compute(k)
-            if rows.dim == 0:
-                continue
-            # Keep a row only if the lower-priority solution drives σ further out of its set.
-            keep = (rows.jacobian @ dq_free) * rows.error <= 0.0
-            if np.any(keep):
-                levels.append(
-                    TaskRows(
-                        rows.jacobian[keep], rows.error[keep], tuple(np.asarray(rows.labels)[keep])
-                    )
-                )
-                active.append(task.name)
-        if not levels:
-            return dq_free, active
-        dq = solve_hierarchy([*levels, ee, posture], 7, c.damping, c.singular_threshold)
+            if rows.dim:
+                candidates.append((task.name, rows, np.zeros(rows.dim, dtype=bool)))
+        while True:
+            added = False
+            for _, rows, chosen in candidates:
+                out = ((rows.jacobian @ dq) * rows.error <= 0.0) & ~chosen
+                if np.any(out):
+                    chosen |= out
+                    added = True
+            if not added:
+                break
+            levels = [
+                TaskRows(r.jacobian[m], r.error[m], tuple(np.asarray(r.labels)[m]))
+                for _, r, m in candidates
+                if np.any(m)
+            ]
+            dq = solve_hierarchy([*levels, ee, posture], 7, c.damping, c.singular_threshold)
+        active = [name for name, _, m in candidates if np.any(m)]
         return dq, active
+
+    def step(
+        self,
+        q: np.ndarray,
+        target: pin.SE3,
+        scene: SceneWorld,
+        reference: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, list[str]]:
+        """Public single step of eq. (6) with the set-based hierarchy (for closed-loop use).
+
+        Args:
+            q: current joint angles [rad], shape (7,).
+            target: desired EE pose in the world frame.
+            scene: objects to avoid (the carried object: :attr:`bodies` ``attach``).
+            reference: posture reference [rad] (7,) of the lowest task (default: keep the last).
+
+        Returns:
+            The next joint angles [rad] (7,) (step bounded as in :meth:`_step`) and the names of
+            the activated set-based tasks.
+        """
+        q = np.array(q, dtype=float)
+        self.ee.target = target
+        if reference is not None:
+            self.posture.reference = np.asarray(reference, dtype=float).copy()
+        q_next, _, active = self._step(q, self.kinematics(q, scene), scene)
+        return q_next, active
 
     def track(
         self,
@@ -187,6 +263,7 @@ class Stpik:
         scene: SceneWorld,
         tight: Sequence[bool],
         deadline: float = np.inf,
+        reference: np.ndarray | None = None,
     ) -> np.ndarray:
         """Follow ``samples`` (EE poses, world frame) from ``q``; joint angles per sample.
 
@@ -196,6 +273,8 @@ class Stpik:
             scene: objects to avoid.
             tight: per sample, True to require the full tolerance (else ×3, see LOOSE_FACTOR).
             deadline: ``time.perf_counter()`` value past which :class:`PlanningTimeout` is raised.
+            reference: posture reference [rad] (7,), e.g. the plan's configuration at the end of
+                the leg (default: the start ``q``, which keeps the start's arm family).
 
         Returns:
             Joint angles reached at each sample [rad], shape (len(samples), 7).
@@ -205,7 +284,7 @@ class Stpik:
         """
         c = self.config
         q = np.array(q, dtype=float)
-        self.posture.reference = q.copy()
+        self.posture.reference = (q if reference is None else np.asarray(reference)).copy()
         out = np.empty((len(samples), 7))
         k = self.kinematics(q, scene)
         for index, (target, strict) in enumerate(zip(samples, tight, strict=True)):
@@ -244,23 +323,30 @@ class Stpik:
         q = np.array(seed, dtype=float)
         self.ee.target = target
         self.posture.reference = q.copy()
-        k = self.kinematics(q, scene)
+        k = self.kinematics(q, scene, lookahead=0.0)
         active: list[str] = []
+        history: list[float] = []
         for _ in range(iterations):
             if time.perf_counter() > deadline:
                 raise PlanningTimeout.past(deadline, c.time_limit_s)
-            if _within(
-                pose_error(target, k.world_ee),
-                c.position_tolerance_m / 2,
-                c.orientation_tolerance_rad / 2,
+            error = pose_error(target, k.world_ee)
+            if _within(error, c.position_tolerance_m / 2, c.orientation_tolerance_rad / 2):
+                break
+            # Stalled: the weighted error shrank by less than STALL_RATIO over STALL_WINDOW steps.
+            history.append(
+                float(np.linalg.norm(error[:3]) + STALL_RAD_TO_M * np.linalg.norm(error[3:]))
+            )
+            if (
+                len(history) > STALL_WINDOW
+                and history[-1] > STALL_RATIO * history[-1 - STALL_WINDOW]
             ):
                 break
-            q, k, active = self._step(q, k, scene)
+            q, k, active = self._step(q, k, scene, bounded=False)
         self._check(k, -1, target, 1.0, active)
         return q
 
     def _step(
-        self, q: np.ndarray, k: Kinematics, scene: SceneWorld
+        self, q: np.ndarray, k: Kinematics, scene: SceneWorld, bounded: bool = True
     ) -> tuple[np.ndarray, Kinematics, list[str]]:
         """One eq. (6) step from ``q`` [rad], clamped to ``max_joint_step_rad`` on every joint.
 
@@ -271,8 +357,73 @@ class Stpik:
         largest = float(np.max(np.abs(dq)))
         if largest > self.config.max_joint_step_rad:
             dq *= self.config.max_joint_step_rad / largest
+        if bounded:  # converge (bounded=False) returns only its end point, checked there
+            dq *= self.step_scale(k, dq)
         q = q + dq
-        return q, self.kinematics(q, scene), active
+        return q, self.kinematics(q, scene, LOOKAHEAD_M if bounded else 0.0), active
+
+    def body_reach(self, k: Kinematics) -> tuple[np.ndarray, np.ndarray]:
+        """R_{j,g} [m] (7, G) and each body's joint (G,): largest distance from joint j's axis
+        to a point of body g moved by it (0 where joint j does not move g); the carried object
+        is the last body when attached.
+
+        To first order a step dq moves no point of body g farther than Σ_j |dq_j| R_{j,g}.
+        """
+        origins = np.array([k.data.oMi[j].translation for j in range(1, 8)])  # (7, 3)
+        axes = np.array([k.data.oMi[j].rotation[:, 2] for j in range(1, 8)])  # RZ joints (7, 3)
+        centres = np.array([m.translation for m in self.geometry_data.oMg])  # (G, 3)
+        joints, radii = self._body_joint, self._body_radius
+        if self.bodies.attached is not None:
+            centres = np.vstack([centres, self.bodies.attached.getTranslation()])
+            joints = np.r_[joints, 7]
+            radii = np.r_[radii, self.bodies.attached_radius]
+        offset = centres[None] - origins[:, None]  # (7, G, 3)
+        along = np.einsum('jgk,jk->jg', offset, axes)
+        to_axis = np.linalg.norm(offset - along[..., None] * axes[:, None], axis=2)
+        distance = to_axis + radii[None]
+        moved = joints[None] >= np.arange(1, 8)[:, None]
+        return np.where(moved, distance, 0.0), joints
+
+    def step_scale(self, k: Kinematics, dq: np.ndarray) -> float:
+        """Factor in (0, 1] so that no inactive pair crosses its failure margin in one step.
+
+        Bounds (Cartesian, from :meth:`body_reach`): a pair not found is at least activation +
+        LOOKAHEAD_M apart, so no body point may move more than LOOKAHEAD_M + activation −
+        failure margin; a found pair outside its activation distance d may lose at most d −
+        failure margin, counting the robot body's motion against a scene object and only the
+        joints between the two links for a self pair. Active pairs are held by their rows.
+        """
+        c = self.config
+        reach, joints = self.body_reach(k)
+        step = np.abs(dq)
+        body_motion = step @ reach  # (G,) [m]
+        scale = 1.0
+
+        def limit(motion: float, allowed: float) -> None:
+            nonlocal scale
+            if motion > 1e-12:
+                scale = min(scale, max(allowed, 1e-4) / motion)
+
+        limit(
+            float(np.max(body_motion)),
+            LOOKAHEAD_M
+            + min(
+                c.obstacle_activation_m - c.obstacle_min_distance_m,
+                c.self_activation_m - c.self_min_distance_m,
+            ),
+        )
+        index = self._body_index
+        for p in k.scene_pairs:
+            if p.distance >= c.obstacle_activation_m:
+                limit(float(body_motion[index[p.name_a]]), p.distance - c.obstacle_min_distance_m)
+        for p in k.self_pairs:
+            if p.distance >= c.self_activation_m:
+                a, b = index[p.name_a], index[p.name_b]
+                if joints[a] > joints[b]:
+                    a, b = b, a
+                relative = float(step[joints[a] :] @ reach[joints[a] :, b])
+                limit(relative, p.distance - c.self_min_distance_m)
+        return scale
 
     def transit(
         self, q_a: np.ndarray, q_b: np.ndarray, scene: SceneWorld, deadline: float = np.inf
@@ -280,7 +431,8 @@ class Stpik:
         """Free-space joint-space move from ``q_a`` to ``q_b`` [rad], checked at each sample.
 
         Samples are spaced ≤ ``step_rad`` on every joint; at each one the self-hit and scene
-        distances must stay above their failure margins.
+        distances must stay at or above their *activation* distances, so that STPIK (whose
+        set-based tasks hold pairs there) can follow the move.
 
         Returns:
             Samples after ``q_a`` up to ``q_b`` [rad], shape (n, 7).
@@ -294,12 +446,12 @@ class Stpik:
         for q in out:
             if time.perf_counter() > deadline:
                 raise PlanningTimeout.past(deadline, c.time_limit_s)
-            k = self.kinematics(q, scene)
+            k = self.kinematics(q, scene, lookahead=0.0)
             for p in k.self_pairs:
-                if p.distance <= c.self_min_distance_m:
+                if p.distance < c.self_activation_m:
                     raise SelfCollision(p.name_a, p.name_b, p.distance)
             for p in k.scene_pairs:
-                if p.distance <= c.obstacle_min_distance_m:
+                if p.distance < c.obstacle_activation_m:
                     raise SceneCollision(p.name_a, p.name_b, p.distance)
         return out
 
@@ -320,20 +472,38 @@ class Stpik:
         error = pose_error(target, k.world_ee)
         if _within(error, c.position_tolerance_m * factor, c.orientation_tolerance_rad * factor):
             return
-        # Tracking failed: name the set-based task that held the arm back, if any.
+        # Tracking failed with every constraint satisfied: IK_NOT_CONVERGED, naming the set-based
+        # task that held the arm back (an active task is not a violated constraint).
+        held = []
         if 'obstacles' in active and k.scene_pairs:
             p = min(k.scene_pairs, key=lambda p: p.distance)
-            raise SceneCollision(p.name_a, p.name_b, p.distance)
+            held.append(
+                f'obstacle task active ({p.name_a} / {p.name_b} {p.distance * 1e3:.1f} mm)'
+            )
         if 'self_hit' in active and k.self_pairs:
             p = min(k.self_pairs, key=lambda p: p.distance)
-            raise SelfCollision(p.name_a, p.name_b, p.distance)
+            held.append(
+                f'self-hit task active ({p.name_a} / {p.name_b} {p.distance * 1e3:.1f} mm)'
+            )
         if 'joint_limits' in active:
             margin = np.minimum(k.q - self.lower, self.upper - k.q)
             j = int(np.argmin(margin))
-            raise JointLimitViolated(j, float(k.q[j]), self.lower[j], self.upper[j])
+            held.append(f'joint-limit task active (joint {j + 1} at {k.q[j]:.3f} rad)')
         raise IkNotConverged(
-            index, float(np.linalg.norm(error[:3])), float(np.linalg.norm(error[3:]))
+            index,
+            float(np.linalg.norm(error[:3])),
+            float(np.linalg.norm(error[3:])),
+            '; '.join(held),
         )
+
+
+def _bounding_radius(geometry: object) -> float:
+    """Radius [m] of the sphere about a primitive's centre that contains it."""
+    if hasattr(geometry, 'halfLength'):
+        return math.hypot(float(geometry.radius), float(geometry.halfLength))
+    if hasattr(geometry, 'halfSide'):
+        return float(np.linalg.norm(geometry.halfSide))
+    return float(geometry.radius)
 
 
 def _within(error: np.ndarray, tol_m: float, tol_rad: float) -> bool:

@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import pytest
 from qtree_scene.scene import ObjectSpec, Scenario
+from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import Reason
 
 HOME = (4.71, 2.84, 0.0, 0.75, 4.62, 4.48, 4.88)
+# Generous limit: several approaches are planned per answer, and a TIMEOUT carries no blockers.
+CONFIG = PlannerConfig(time_limit_s=120.0)
 
 
 def _scene(*objects: ObjectSpec, table_x: float = 1.2) -> Scenario:
@@ -24,7 +27,7 @@ def behind_one(make_cylinder, robot):
         make_cylinder('O1', 0.52, 0.0),
         make_cylinder('O2', 0.45, -0.35),
     )
-    return MotionPlanner(scene, model=robot)
+    return MotionPlanner(scene, CONFIG, model=robot)
 
 
 def test_target_behind_one_obstacle_is_blocked_by_it(behind_one):
@@ -47,7 +50,7 @@ def test_out_of_reach_is_blocked_by_nothing_movable(make_cylinder, robot):
     scene = _scene(
         make_cylinder('T', 1.3, 0.0, 'target'), make_cylinder('O1', 0.5, 0.0), table_x=1.5
     )
-    planner = MotionPlanner(scene, model=robot)
+    planner = MotionPlanner(scene, CONFIG, model=robot)
     result = planner.check('T', [])
     assert not result.feasible
     assert result.blocked_by_immovable and result.blocking_ids == ()

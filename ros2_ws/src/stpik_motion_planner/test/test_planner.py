@@ -8,11 +8,14 @@ import math
 import fcl
 import numpy as np
 import pytest
+from qtree_scene.placement import drop_slots
+from qtree_scene.scene import ObjectSpec
 from stpik_motion_planner.collision import object_geometry, object_transform
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import InvalidConfig, InvalidRequest
 from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import Reason
+from stpik_motion_planner.verifier import Carried, TrajectoryVerifier
 
 
 @pytest.fixture(scope='module')
@@ -28,7 +31,7 @@ def test_free_unoccluded_object_is_feasible(free_result):
     assert len(result.times) == len(result.joint_trajectory) == len(result.ee_path)
     assert np.all(np.diff(result.times) > 0)
     assert 0 < result.grasp_index < result.release_index < len(result.times) - 1
-    assert set(result.timings) == {'sampling', 'stpik', 'collision'}
+    assert set(result.timings) == {'sampling', 'stpik', 'collision', 'verify'}
 
 
 def test_trajectory_starts_and_ends_home_and_grasps_the_object(free_result, robot):
@@ -130,3 +133,47 @@ def test_config_rejects_out_of_range_values():
         dataclasses.replace(PlannerConfig(), seed=1.5)
     with pytest.raises(InvalidConfig, match='obstacle_activation_m'):
         PlannerConfig(obstacle_activation_m=0.001, obstacle_min_distance_m=0.01)
+
+
+def test_every_returned_trajectory_passes_the_independent_verifier(free_result, robot):
+    planner, result = free_result
+    obj = planner.scenario.object('T')
+    report = TrajectoryVerifier(robot).verify(
+        result.joint_trajectory,
+        planner.planning_scene('T', []),
+        Carried(obj, result.grasp_index, result.release_index),
+    )
+    assert report.ok, report.summary()
+    assert report.max_gap_m <= 0.01 + 1e-12
+    # Released where the simulator stands it: on drop slot 0.
+    release = robot.ee_pose(result.joint_trajectory[result.release_index]).translation
+    slot = planner.slot_position(0, obj)
+    assert np.linalg.norm(release[:2] - slot[:2]) < 0.012
+
+
+def test_placed_objects_stand_in_occupied_slots_as_obstacles(boxed_scene, robot):
+    planner = MotionPlanner(boxed_scene, model=robot)
+    scene = planner.planning_scene('T', ['O3', 'O1'])
+    ids = {o.id for o in scene}
+    assert {'slot_0', 'slot_1'} <= ids and 'slot_2' not in ids and not ids & {'O1', 'O3', 'T'}
+    assert scene == planner.planning_scene('T', ['O1', 'O3'])  # the set, not the order
+
+
+def test_object_too_big_for_the_open_hand_is_refused(make_scenario, robot):
+    big = ObjectSpec('T', 'target', 'cylinder', (0.65, 0.0, 0.07), radius=0.05, height=0.14)
+    result = MotionPlanner(make_scenario(big), model=robot).check('T', [])
+    assert not result.feasible and result.reason == Reason.OBJECT_TOO_BIG
+    assert '100 mm across' in result.message and len(result.joint_trajectory) == 0
+
+
+def test_no_free_slot_left_is_no_placement(make_scenario, make_cylinder, robot):
+    dummies = [
+        make_cylinder(f'D{i}', 0.85 + 0.07 * (i % 2), -0.4 + 0.07 * (i // 2)) for i in range(24)
+    ]
+    scene = make_scenario(make_cylinder('T', 0.6, 0.0, 'target'), *dummies)
+    slots = drop_slots(scene)
+    assert len(slots) < len(dummies)
+    relocated = [d.id for d in dummies[: len(slots)]]
+    result = MotionPlanner(scene, model=robot).check('T', relocated)
+    assert not result.feasible and result.reason == Reason.NO_PLACEMENT
+    assert f'room for {len(slots)}' in result.message

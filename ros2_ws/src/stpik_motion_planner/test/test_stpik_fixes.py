@@ -1,0 +1,174 @@
+"""STPIK fixes of issue #13 (eq. 6 as coded): each test failed on the code before the fix."""
+
+from __future__ import annotations
+
+import fcl
+import numpy as np
+import pinocchio as pin
+import pytest
+from jaco2_description.model import HOME
+from qtree_scene.scene import ObjectSpec
+from stpik_motion_planner.collision import SceneWorld, object_geometry, object_transform
+from stpik_motion_planner.config import PlannerConfig
+from stpik_motion_planner.exceptions import IkNotConverged, JointLimitViolated, SceneCollision
+from stpik_motion_planner.planner import _outside_limit_band
+from stpik_motion_planner.stpik import READY, Stpik, solve_hierarchy
+from stpik_motion_planner.tasks import TaskRows
+
+HOME_Q = np.asarray(HOME)
+
+
+class _Stub:
+    def __init__(self, name: str, rows: TaskRows) -> None:
+        self.name = name
+        self.rows = rows
+
+    def compute(self, k):
+        return self.rows
+
+
+def _row(values, error):
+    return TaskRows(
+        np.atleast_2d(np.r_[values, np.zeros(7 - len(values))]), np.array([error]), ('r',)
+    )
+
+
+def test_fix1_rows_are_rechecked_after_each_activation(robot):
+    stpik = Stpik(robot, PlannerConfig())
+    stpik.ee = _Stub('ee', _row([1.0, 1.0], 1.0))
+    stpik.posture = _Stub('posture', TaskRows(np.eye(7), np.zeros(7), tuple('abcdefg')))
+    # B (σ above its set) is pushed out by the free solution; A only once B is active.
+    row_b = _row([0.0, 1.0], -0.1)
+    row_a = _row([1.0, -3.0], -0.05)
+    stpik.joint_limits = _Stub('B', row_b)
+    stpik.self_hit = _Stub('A', row_a)
+    stpik.obstacles = _Stub('none', TaskRows(np.zeros((0, 7)), np.zeros(0), ()))
+    dq, active = stpik.solve(None)
+    assert set(active) == {'A', 'B'}
+    for rows in (row_a, row_b):  # no activated row is driven further out of its set
+        assert float((rows.jacobian @ dq)[0]) * float(rows.error[0]) > 0.0
+
+
+def test_fix2_lower_task_never_changes_a_damped_higher_level():
+    rng = np.random.default_rng(0)
+    U, _, Vt = np.linalg.svd(rng.normal(size=(2, 7)), full_matrices=False)
+    J1 = U @ np.diag([1.0, 0.005]) @ Vt  # near-singular: damping acts (threshold 0.02)
+    x1 = np.array([0.1, 0.05])
+    J2, x2 = rng.normal(size=(5, 7)), rng.normal(size=5)
+    alone = solve_hierarchy([TaskRows(J1, x1, ('a', 'b'))], 7, 0.02, 0.02)
+    both = solve_hierarchy(
+        [TaskRows(J1, x1, ('a', 'b')), TaskRows(J2, x2, tuple('cdefg'))], 7, 0.02, 0.02
+    )
+    np.testing.assert_allclose(J1 @ both, J1 @ alone, atol=1e-9)
+
+
+def _min_distance(robot, q, obj: ObjectSpec) -> float:
+    robot.update_fcl(q)
+    body = fcl.CollisionObject(object_geometry(obj), object_transform(obj))
+    request = fcl.DistanceRequest()
+    return min(
+        fcl.distance(o, body, request, fcl.DistanceResult())
+        for link, o in robot.fcl_objects()
+        if not link.endswith(('link_base', 'link_1'))
+    )
+
+
+def test_fix3_no_pair_goes_from_inactive_to_penetrating_in_one_step(robot):
+    stpik = Stpik(robot, PlannerConfig())
+    q = READY.copy()
+    ee = robot.ee_pose(q)
+    direction = np.array([1.0, 0.0, 0.0])
+    wall = ObjectSpec('wall', 'obstacle', 'box', (0, 0, 0), size=(0.02, 1.0, 1.0))
+    for x in np.arange(ee.translation[0], ee.translation[0] + 0.4, 0.002):
+        wall = ObjectSpec('wall', 'obstacle', 'box', (x, 0.0, 0.3), size=(0.02, 1.0, 1.0))
+        if _min_distance(robot, q, wall) >= 0.03:
+            break
+    start = _min_distance(robot, q, wall)
+    assert start > PlannerConfig().obstacle_activation_m  # inactive before the step
+    target = pin.SE3(ee.rotation, ee.translation + 0.15 * direction)
+    q_next, _ = stpik.step(q, target, SceneWorld([wall]))
+    assert _min_distance(robot, q_next, wall) > PlannerConfig().obstacle_min_distance_m
+
+
+def test_fix4_track_takes_a_posture_reference(robot):
+    stpik = Stpik(robot, PlannerConfig())
+    ee = robot.ee_pose(READY)
+    reference = READY + 0.1
+    stpik.track(READY, [ee], SceneWorld([]), [True], reference=reference)
+    np.testing.assert_allclose(stpik.posture.reference, reference)
+    stpik.track(READY, [ee], SceneWorld([]), [True])
+    np.testing.assert_allclose(stpik.posture.reference, READY)
+
+
+def test_fix5_active_obstacle_task_is_not_a_collision(robot):
+    stpik = Stpik(robot, PlannerConfig())
+    q = READY.copy()
+    ee = robot.ee_pose(q)
+    for x in np.arange(ee.translation[0], ee.translation[0] + 0.4, 0.002):
+        wall = ObjectSpec('wall', 'obstacle', 'box', (x, 0.0, 0.3), size=(0.02, 1.0, 1.0))
+        if _min_distance(robot, q, wall) >= 0.04:
+            break
+    target = pin.SE3(ee.rotation, ee.translation + np.array([0.08, 0.0, 0.0]))  # behind it
+    with pytest.raises(IkNotConverged, match='obstacle task active'):
+        stpik.track(q, [target], SceneWorld([wall]), [True])
+
+
+def test_fix6_pregrasp_inside_the_limit_band_is_refused(robot):
+    stpik = Stpik(robot, PlannerConfig())
+    q = HOME_Q.copy()
+    q[1] = stpik.lower[1] + 0.05
+    with pytest.raises(JointLimitViolated, match='activation band'):
+        _outside_limit_band(q, stpik, 0.1)
+    _outside_limit_band(HOME_Q, stpik, 0.1)
+
+
+def test_fix7_continuous_joints_are_unbounded(robot):
+    stpik = Stpik(robot, PlannerConfig())
+    assert np.all(np.isinf(stpik.lower[[0, 2, 4, 6]])) and np.all(
+        np.isinf(stpik.upper[[0, 2, 4, 6]])
+    )
+    q = HOME_Q.copy()
+    q[0] = 2 * np.pi + 0.3  # beyond ±2π
+    k = stpik.kinematics(q, SceneWorld([]))
+    assert stpik.joint_limits.compute(k).dim == 0
+
+
+def test_fix8_every_model_self_pair_is_checked(robot):
+    stpik = Stpik(robot, PlannerConfig())
+    rng = np.random.default_rng(1)
+    links = robot.collision_links
+    seen = set()
+    threshold = stpik.config.self_activation_m
+    for _ in range(300):
+        q = rng.uniform(-np.pi, np.pi, 7)
+        q[[1, 3, 5]] = rng.uniform(robot.limits.lower[[1, 3, 5]], robot.limits.upper[[1, 3, 5]])
+        distances = robot.self_collision_distances(q)
+        found = {
+            frozenset((p.name_a, p.name_b))
+            for p in stpik.kinematics(q, SceneWorld([])).self_pairs
+            if p.distance < threshold
+        }
+        for (i, j), d in zip(robot.self_collision_pairs, distances, strict=True):
+            if d < threshold - 1e-4:
+                assert frozenset((links[i], links[j])) in found, (links[i], links[j], d)
+                seen.add(frozenset((links[i][9:], links[j][9:])))
+    assert frozenset(('link_base', 'link_2')) in seen  # skipped before the fix
+
+
+def test_fix9_transit_needs_the_activation_clearance(robot):
+    stpik = Stpik(robot, PlannerConfig())
+    q_a, q_b = HOME_Q.copy(), HOME_Q.copy()
+    q_b[0] += 0.6
+    mid = robot.ee_pose((q_a + q_b) / 2).translation
+    for h in np.arange(0.05, 0.4, 0.002):
+        post = ObjectSpec(
+            'post', 'obstacle', 'cylinder', tuple(mid - [0, 0, h]), radius=0.02, height=0.05
+        )
+        path = [q_a + (q_b - q_a) * t for t in np.linspace(0, 1, 61)]
+        gap = min(_min_distance(robot, q, post) for q in path)
+        if 0.008 < gap < 0.02:
+            break
+    else:
+        pytest.fail('no post placement 8-20 mm from the transit')
+    with pytest.raises(SceneCollision):
+        stpik.transit(q_a, q_b, SceneWorld([post]))

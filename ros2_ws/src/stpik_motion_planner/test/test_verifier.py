@@ -1,0 +1,95 @@
+"""TrajectoryVerifier: catches collisions between samples, limit violations and self-hits."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from jaco2_description.model import ARM_JOINTS, HOME
+from qtree_scene.scene import ObjectSpec
+from stpik_motion_planner.verifier import RESOLUTION_M, Carried, TrajectoryVerifier
+
+HOME_Q = np.asarray(HOME)
+TABLE = ObjectSpec('table', 'static', 'box', (0.35, 0.0, -0.025), size=(1.2, 1.4, 0.05))
+
+
+@pytest.fixture(scope='module')
+def verifier(robot) -> TrajectoryVerifier:
+    return TrajectoryVerifier(robot)
+
+
+def test_collision_between_two_clear_samples_is_found(verifier, robot):
+    q_a = HOME_Q.copy()
+    q_b = HOME_Q.copy()
+    q_b[0] += 1.2  # joint 1 swings the hand on an arc
+    mid = robot.ee_pose((q_a + q_b) / 2).translation
+    post = ObjectSpec('post', 'obstacle', 'cylinder', tuple(mid), radius=0.02, height=0.05)
+    ends = verifier.verify(np.array([q_a, q_a, q_b, q_b]), [post, TABLE])
+    # Both samples clear the post, the motion between them does not.
+    for q in (q_a, q_b):
+        assert verifier.verify(q[None], [post, TABLE]).ok
+    assert not ends.ok
+    hit = ends.scene_collisions[0]
+    assert hit.name_b == 'post' and 1.0 < hit.index < 2.0 and hit.value < 0.0
+    assert ends.max_gap_m <= RESOLUTION_M + 1e-12
+
+
+def test_joint_limit_violation_is_reported(verifier):
+    q = np.array([HOME_Q, HOME_Q])
+    q[1, 1] = 0.75  # joint 2 below its 0.820 rad limit
+    report = verifier.verify(q, [])
+    assert [(v.name_a, v.name_b) for v in report.limit_violations] == [(ARM_JOINTS[1], 'lower')]
+    assert report.limit_violations[0].value == pytest.approx(0.820305 - 0.75, abs=1e-6)
+
+
+def test_continuous_joints_are_unbounded(verifier):
+    q = np.array([HOME_Q, HOME_Q])
+    q[1, [0, 2, 4, 6]] += 3 * np.pi  # beyond ±2π on joints 1, 3, 5, 7
+    report = verifier.verify(q, [])
+    assert not report.limit_violations
+
+
+def test_self_hit_is_found_on_every_model_pair(verifier, robot):
+    rng = np.random.default_rng(3)
+    lower, upper = robot.limits.lower, robot.limits.upper
+    for _ in range(5000):
+        q = rng.uniform(np.maximum(lower, -np.pi), np.minimum(upper, np.pi + 2))
+        distances = robot.self_collision_distances(q)
+        if np.min(distances) < -0.005:
+            break
+    else:
+        pytest.fail('no self-colliding configuration sampled')
+    i, j = robot.self_collision_pairs[int(np.argmin(distances))]
+    report = verifier.verify(q[None], [])
+    names = {(v.name_a, v.name_b) for v in report.self_collisions}
+    links = robot.collision_links
+    assert (links[i], links[j]) in names or (links[j], links[i]) in names
+
+
+def test_carried_object_moves_with_the_hand_and_is_checked(verifier, robot):
+    q_a = HOME_Q.copy()
+    q_b = HOME_Q.copy()
+    q_b[0] += 0.8
+    ee_a, ee_b = robot.ee_pose(q_a), robot.ee_pose(q_b)
+    hanging = ee_a.translation + np.array([0.0, 0.0, -0.25])  # 25 cm below the hand
+    obj = ObjectSpec('C', 'obstacle', 'cylinder', tuple(hanging), radius=0.02, height=0.08)
+    carried_at_b = (ee_b * ee_a.inverse()).act(hanging)
+    post = ObjectSpec(
+        'post', 'obstacle', 'cylinder', tuple(carried_at_b), radius=0.02, height=0.05
+    )
+    traj = np.array([q_a, q_b])
+    assert verifier.verify(traj, [post]).ok  # the arm alone clears the post
+    held = verifier.verify(traj, [post], Carried(obj, 0, 1))
+    assert [(v.name_a, v.name_b) for v in held.scene_collisions] == [('carried', 'post')]
+    assert held.scene_collisions[0].index == pytest.approx(1.0, abs=0.2)
+    # Released at once: the object stays where it was and nothing touches the post.
+    assert verifier.verify(traj, [post], Carried(obj, 0, 0)).ok
+
+
+def test_bad_trajectory_shapes_are_refused(verifier):
+    with pytest.raises(ValueError, match='shape'):
+        verifier.verify(np.zeros((3, 6)), [])
+    with pytest.raises(ValueError, match='non-finite'):
+        verifier.verify(np.full((2, 7), np.nan), [])
+    with pytest.raises(ValueError, match='outside the trajectory'):
+        obj = ObjectSpec('C', 'obstacle', 'cylinder', (0.5, 0, 0.05), radius=0.03, height=0.1)
+        verifier.verify(np.zeros((2, 7)), [], Carried(obj, 1, 5))
