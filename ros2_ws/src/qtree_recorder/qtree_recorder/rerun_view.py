@@ -60,8 +60,9 @@ STATUSES = {0: 'in_clutter', 1: 'grasped', 2: 'relocated'}
 REASONS = {
     0: 'SUCCESS', 101: 'UNKNOWN_OBJECT', 102: 'ALREADY_RELOCATED', 103: 'INVALID_REQUEST',
     104: 'NO_SCENE', 105: 'INVALID_SCENE', 201: 'NO_CARTESIAN_PATH', 202: 'IK_NOT_CONVERGED',
-    203: 'JOINT_LIMIT', 204: 'SELF_COLLISION', 205: 'SCENE_COLLISION', 301: 'TIMEOUT',
-    302: 'EXECUTION_FAILED', 303: 'PLANNER_BUSY',
+    203: 'JOINT_LIMIT', 204: 'SELF_COLLISION', 205: 'SCENE_COLLISION',
+    206: 'VERIFICATION_FAILED', 207: 'NO_PLACEMENT', 208: 'OBJECT_TOO_BIG',
+    209: 'CARRIED_COLLISION', 301: 'TIMEOUT', 302: 'EXECUTION_FAILED', 303: 'PLANNER_BUSY',
 }  # fmt: skip
 TOPICS = ('/robot_description', '/joint_states', '/scene', '/motion_planner/events', '/qtree',
           '/training_stats', '/motion_planner/tracking')  # fmt: skip
