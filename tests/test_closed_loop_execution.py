@@ -122,6 +122,12 @@ def test_object_moved_onto_the_path_stops_the_arm_with_the_reason(launch, ros_no
     ros_node.create_subscription(
         JointState, '/joint_states', lambda m: states.append(np.array(m.position[:7])), 10
     )
+    publisher = ros_node.create_publisher(Scene, '/scene', LATCHED)
+    # Matched before sending: a request, or the intruder's scene, written earlier is lost (#18).
+    ros_node.wait_matched(client)
+    # Our own /scene subscription counts as one reader: wait for the motion planner's too.
+    assert ros_node.spin_until(lambda: publisher.get_subscription_count() >= 2, 30.0)
+    ros_node.call(client, RelocateObject.Request(object_id=''), 30.0)  # answered: both ways match
     request = RelocateObject.Request(object_id='T', relocated_ids=EVERY_OBSTACLE, execute=True)
     future = client.call_async(request)
     assert ros_node.spin_until(lambda: len(seen['tracking']) > 20, 60.0)
@@ -139,7 +145,6 @@ def test_object_moved_onto_the_path_stops_the_arm_with_the_reason(launch, ros_no
     )
     intruder.pose.orientation.w = 1.0
     scene.objects.append(intruder)
-    publisher = ros_node.create_publisher(Scene, '/scene', LATCHED)
     publisher.publish(scene)
     assert ros_node.spin_until(future.done, 300.0), 'no answer'
     answer = future.result()
