@@ -8,7 +8,8 @@ two dumps (e.g. before / after a planner change) compare on the same questions.
 
 Example:
     ./qtree run python scripts/compare_answers.py --out /tmp/after.json --keys /tmp/before.json
-    ./qtree run python scripts/compare_answers.py --compare /tmp/before.json /tmp/after.json
+    ./qtree run python scripts/compare_answers.py --compare /tmp/before.json /tmp/after.json \\
+        --json benchmarks/results/hand_model_answers.json
 """
 
 from __future__ import annotations
@@ -53,9 +54,10 @@ def dump(out: Path, keys_from: Path | None) -> None:
     out.write_text(json.dumps(data, indent=1, sort_keys=True))
 
 
-def compare(before: Path, after: Path) -> None:
-    """Print the answers that changed between two dumps, on their common questions."""
+def compare(before: Path, after: Path, out: Path | None = None) -> None:
+    """Print (and with ``out`` write as JSON) the answers that changed between two dumps."""
     a, b = json.loads(before.read_text()), json.loads(after.read_text())
+    summary = {}
     for name in SCENES:
         old, new = a[name]['answers'], b[name]['answers']
         common = sorted(set(old) & set(new))
@@ -67,6 +69,16 @@ def compare(before: Path, after: Path) -> None:
         )
         for k in feasible + reason:
             print(f'  {k}: {old[k]} -> {new[k]}')
+        summary[name] = {
+            'level_before': a[name]['level'],
+            'level_after': b[name]['level'],
+            'answers': len(common),
+            'feasibility_changes': len(feasible),
+            'reason_changes': len(reason),
+            'changed': {k: [old[k], new[k]] for k in feasible + reason},
+        }
+    if out is not None:
+        out.write_text(json.dumps(summary, indent=1, sort_keys=True) + '\n')
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -75,9 +87,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--out', type=Path, help='write the answers to this JSON file')
     parser.add_argument('--keys', type=Path, help='also ask the questions of this dump')
     parser.add_argument('--compare', nargs=2, type=Path, metavar=('BEFORE', 'AFTER'))
+    parser.add_argument('--json', type=Path, help='with --compare: write the changes here')
     args = parser.parse_args(argv)
     if args.compare:
-        compare(*args.compare)
+        compare(*args.compare, args.json)
     elif args.out:
         dump(args.out, args.keys)
     else:

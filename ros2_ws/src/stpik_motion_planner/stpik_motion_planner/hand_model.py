@@ -136,6 +136,11 @@ class HandModel:
         return np.asarray(pose.act(self.ball_centre), dtype=float)
 
     @property
+    def palm_front_m(self) -> float:
+        """Distance [m] of the palm's front face (link 7) behind the EE origin (0.039 m)."""
+        return -max(float(p[:, 2].max()) for k, p in self.parts.items() if k.endswith('link_7'))
+
+    @property
     def half_width_m(self) -> float:
         """Largest |x| (across the fingers) of the hand [m]."""
         return max(float(np.max(np.abs(p[:, 0]))) for p in self.parts.values())

@@ -256,7 +256,8 @@ class MotionPlanner:
         # Mid-height, raised on short objects so the hand keeps its margin to the table.
         low = centre[2] - half + HAND_HALF_HEIGHT_M + c.obstacle_activation_m + 0.005
         grasp_z = min(max(centre[2], low), centre[2] + half - 0.01)
-        grasp = pin.SE3(rotation, np.r_[centre[:2], grasp_z] + c.grasp_depth_m * axis)
+        depth = min(c.grasp_depth_m, self._palm_room(obj, yaw))
+        grasp = pin.SE3(rotation, np.r_[centre[:2], grasp_z] + depth * axis)
         blockers = sampler.corridor_blockers(grasp)
         if blockers:
             failures.append(
@@ -307,6 +308,20 @@ class MotionPlanner:
             options,
             yaw,
         )
+
+    def _palm_room(self, obj: ObjectSpec, yaw: float) -> float:
+        """Deepest EE origin beyond the object axis [m] keeping the palm off the object.
+
+        The palm's front face is :attr:`HandModel.palm_front_m` behind the EE origin; the object
+        reaches its half depth along the approach (a box turned by ``obj.yaw - yaw``) toward it.
+        Negative for deep boxes: the EE then stops short of the axis (3 cm cylinders: +4 mm).
+        """
+        if obj.shape == 'cylinder':
+            half = float(obj.radius)
+        else:
+            turn = obj.yaw - yaw
+            half = abs(obj.size[0] * math.cos(turn)) / 2 + abs(obj.size[1] * math.sin(turn)) / 2
+        return self.hand.palm_front_m - half - self.config.obstacle_min_distance_m
 
     def _track(
         self,

@@ -7,6 +7,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from qtree_scene import placement
+from qtree_scene.scene import ObjectSpec
 from scipy.spatial import ConvexHull
 from stpik_motion_planner.cartesian_path import CartesianSampler, grasp_rotation
 from stpik_motion_planner.collision import SceneWorld
@@ -132,3 +133,23 @@ def test_occluded_object_is_no_cartesian_path_naming_the_blockers(
     result = MotionPlanner(make_scenario(target, *posts), config, model=robot).check('T', [])
     assert not result.feasible and result.reason == Reason.NO_CARTESIAN_PATH
     assert 'blocked by P0, P1' in result.message
+
+
+def test_grasp_keeps_the_palm_off_a_deep_box(hand, make_scenario, robot):
+    """A box 8 cm deep along the approach: the EE stops short of its axis (it reached it)."""
+    box = ObjectSpec('T', 'target', 'box', (0.55, 0.1, 0.05), yaw=0.4, size=(0.06, 0.08, 0.10))
+    planner = MotionPlanner(make_scenario(box), model=robot)
+    yaw = -0.22
+    room = planner._palm_room(box, yaw)
+    assert room < -0.01
+    assert (
+        planner._palm_room(ObjectSpec('c', 'obstacle', 'cylinder', (0, 0, 0), 0.0, 0.03, 0.1), 0)
+        > 0
+    )
+    sampler = _sampler(hand, make_scenario, box)
+    palm = {'palm': hand.at_pose['j2s7s300_link_7']}
+    axis = grasp_rotation(yaw)[:, 2]
+    at_axis = _grasp(0.55, 0.1, 0.07, yaw)
+    backed = pin.SE3(at_axis.rotation, at_axis.translation + room * axis)
+    assert sampler._hits(palm, at_axis) == ['T']  # the EE on the axis: palm inside the box
+    assert sampler._hits(palm, backed) == []
