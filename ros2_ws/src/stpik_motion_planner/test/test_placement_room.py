@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from jaco2_description.model import HOME
 from qtree_scene.generator import generate_clutter
 from qtree_scene.placement import drop_slots
+from qtree_scene.scene import ObjectSpec, Scenario
 from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import Reason
 from stpik_motion_planner.verifier import Carried, TrajectoryVerifier
@@ -52,4 +54,21 @@ def test_relocation_beyond_the_room_is_no_placement(planner):
     result = planner.check('T', obstacles)  # the 31st relocation
     assert not result.feasible and result.reason == Reason.NO_PLACEMENT
     assert 'relocation 31 of a scene with room for 30' in result.message
+    assert len(result.joint_trajectory) == 0
+
+
+def test_scene_without_free_table_in_reach_is_no_placement(make_cylinder, robot):
+    """A table that ends just beyond the clutter: no slot at all, the first relocation says so."""
+    table = ObjectSpec('table', 'static', 'box', (0.6, 0.0, -0.025), size=(0.5, 0.4, 0.05))
+    scene = Scenario(
+        'no_room',
+        (make_cylinder('T', 0.6, 0.0, 'target'), make_cylinder('O1', 0.7, 0.1), table),
+        (0.0, 0.5, 0.15),
+        (0.3, 0.3, 0.3),
+        tuple(float(v) for v in HOME),
+    )
+    assert drop_slots(scene) == ()
+    result = MotionPlanner(scene, model=robot).check('T', [])
+    assert not result.feasible and result.reason == Reason.NO_PLACEMENT
+    assert 'relocation 1 of a scene with room for 0' in result.message
     assert len(result.joint_trajectory) == 0
