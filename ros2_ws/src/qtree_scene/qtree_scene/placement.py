@@ -17,7 +17,7 @@ behind the robot too, where the table reaches), away from every clutter object's
 corridors; up to :data:`MAX_SLOTS` are kept.
 
 Room scales with the free table area within reach: about one slot per 0.167 m × 0.092 m of ring
-(open hand 0.20 m wide, 3 cm objects). The 1.2 m × 1.4 m table of S1-S3 gives 16-22 slots; a
+(open hand 0.20 m wide, 3 cm objects). The 1.2 m × 1.4 m table of S1-S3 gives 15-23 slots; a
 table reaching :data:`DROP_TABLE_REACH_M` around the base (what
 :func:`qtree_scene.generator.generate_clutter` lays) gives ≥ 30 even beside 30 clutter objects.
 When the slots run out the motion planner answers ``NO_PLACEMENT`` (:func:`capacity`).
@@ -51,8 +51,9 @@ HAND_HALF_WIDTH_M = 0.105
 HAND_BEHIND_M = 0.16
 WRIST_BEHIND_M = 0.45
 WRIST_HALF_WIDTH_M = 0.045
-# Outermost slot ring radius [m]: side-grasp reach at carry height (every azimuth of this ring
-# planned and verified in stpik_motion_planner/test/test_placement_room.py).
+# Outermost slot ring radius [m]: side-grasp reach at carry height (the 30 slots of a 30-object
+# scene, beside and behind the base, planned and verified in test_placement_room.py of
+# stpik_motion_planner).
 RING_MAX_M = 0.84
 RING_MIN_M = 0.46  # innermost slot ring radius [m] (the wrist must fit behind the hand)
 # Table reach around the base axis that holds every ring (+ the largest object and a margin) [m].
