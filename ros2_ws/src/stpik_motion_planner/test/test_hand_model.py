@@ -153,3 +153,11 @@ def test_grasp_keeps_the_palm_off_a_deep_box(hand, make_scenario, robot):
     backed = pin.SE3(at_axis.rotation, at_axis.translation + room * axis)
     assert sampler._hits(palm, at_axis) == ['T']  # the EE on the axis: palm inside the box
     assert sampler._hits(palm, backed) == []
+
+
+def test_grasp_height_constants_bound_the_hand(hand):
+    """The grasp height keeps the real hand (|y| ≤ 0.047 m, EE y up) off the table."""
+    from stpik_motion_planner.planner import HAND_BELOW_EE_M, HAND_HALF_HEIGHT_M
+
+    lowest = max(float(np.max(np.abs(p[:, 1]))) for p in hand.parts.values())
+    assert lowest <= HAND_HALF_HEIGHT_M <= HAND_BELOW_EE_M
