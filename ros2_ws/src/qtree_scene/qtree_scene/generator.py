@@ -24,6 +24,7 @@ from jaco2_description.model import HOME
 
 from qtree_scene.exceptions import ScenarioError
 from qtree_scene.footprint import Footprint, overlap
+from qtree_scene.placement import DROP_TABLE_REACH_M
 from qtree_scene.scenario import TABLE_ID, validate_scenario
 from qtree_scene.scene import ObjectSpec, Scenario
 
@@ -31,7 +32,9 @@ MAX_DENSITY = 0.4  # random sequential addition of mixed shapes jams near 0.45; 
 ASPECT = 1.75  # region width (y) / depth (x) [-]
 DROP_ZONE_CENTER = (0.0, 0.5, 0.15)  # [m]
 DROP_ZONE_SIZE = (0.3, 0.3, 0.3)  # [m]
-TABLE_X_MIN = -0.25  # table edge behind the robot base [m]
+# Table edge behind the robot base [m]: the table reaches all around the base, so that the drop
+# slots of qtree_scene.placement (beside and behind the robot) have room for 30 relocations.
+TABLE_X_MIN = -DROP_TABLE_REACH_M
 TABLE_MARGIN = 0.1  # table border around the clutter region [m]
 # Side-grasp workspace of the Jaco² j2s7s300 for the target: horizontal distance of the object
 # axis from the base axis and its azimuth (isolated objects are graspable on x ∈ [0.3, 0.85] m,
@@ -313,6 +316,7 @@ def _assemble(
             )
     x_max = x_min + depth + TABLE_MARGIN
     half_y = max(DROP_ZONE_CENTER[1] + DROP_ZONE_SIZE[1] / 2, width / 2) + TABLE_MARGIN
+    half_y = max(half_y, DROP_TABLE_REACH_M)  # room for the drop slots beside the robot
     table = ObjectSpec(
         id=TABLE_ID,
         role='static',

@@ -12,8 +12,15 @@ The slots are laid out so that placing into slot k never touches slots 0 … k�
 the wrist behind it, :data:`HAND_FOOTPRINT`, clear every earlier slot's disc by
 :data:`SLOT_MARGIN_M`), and so that no slot's hand footprint meets an object standing in the
 clutter at the start. Candidates are rings about the base axis, outermost first, those
-nearest the drop zone's azimuth first, on the free table area on both sides, away from every
-clutter object's approach corridors; up to :data:`MAX_SLOTS` are kept.
+nearest the drop zone's azimuth first, on the free table area all around the base (beside and
+behind the robot too, where the table reaches), away from every clutter object's approach
+corridors; up to :data:`MAX_SLOTS` are kept.
+
+Room scales with the free table area within reach: about one slot per 0.167 m × 0.092 m of ring
+(open hand 0.20 m wide, 3 cm objects). The 1.2 m × 1.4 m table of S1-S3 gives 15-23 slots; a
+table reaching :data:`DROP_TABLE_REACH_M` around the base (what
+:func:`qtree_scene.generator.generate_clutter` lays) gives ≥ 30 even beside 30 clutter objects.
+When the slots run out the motion planner answers ``NO_PLACEMENT`` (:func:`capacity`).
 """
 
 from __future__ import annotations
@@ -44,8 +51,13 @@ HAND_HALF_WIDTH_M = 0.105
 HAND_BEHIND_M = 0.16
 WRIST_BEHIND_M = 0.45
 WRIST_HALF_WIDTH_M = 0.045
-RING_MAX_M = 0.76  # outermost slot ring radius [m] (side-grasp reach at carry height)
+# Outermost slot ring radius [m]: side-grasp reach at carry height (the 30 slots of a 30-object
+# scene, beside and behind the base, planned and verified in test_placement_room.py of
+# stpik_motion_planner).
+RING_MAX_M = 0.84
 RING_MIN_M = 0.46  # innermost slot ring radius [m] (the wrist must fit behind the hand)
+# Table reach around the base axis that holds every ring (+ the largest object and a margin) [m].
+DROP_TABLE_REACH_M = RING_MAX_M + 0.11
 # The radial approach corridor of every clutter object (from it toward the base, CORRIDOR_M long,
 # as wide as the open hand) is kept free of slots [m].
 CORRIDOR_M = 0.45
@@ -120,7 +132,9 @@ def drop_slots(scenario: Scenario) -> tuple[Slot, ...]:
     candidates = []
     rho = RING_MAX_M
     while rho >= RING_MIN_M - 1e-9:
-        step = 2.0 * math.asin(min(1.0, lateral / (2.0 * rho)))
+        # Neighbours on a ring are ``lateral`` apart across the hand (not along the chord, which
+        # is longer: a chord of ``lateral`` put every other candidate inside a hand footprint).
+        step = math.asin(min(1.0, lateral / rho)) * (1.0 + 1e-6)
         count = math.floor(math.pi / step)
         for k in range(-count, count + 1):
             yaw = zone_yaw + k * step
@@ -213,3 +227,8 @@ def occupied_envelopes(
         )
         for s in slots[: len(objects)]
     ]
+
+
+def capacity(scenario: Scenario) -> int:
+    """Relocations the scenario has room for (number of :func:`drop_slots`) [-]."""
+    return len(drop_slots(scenario))

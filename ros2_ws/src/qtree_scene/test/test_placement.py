@@ -9,8 +9,12 @@ import pytest
 from qtree_scene.generator import generate_clutter
 from qtree_scene.placement import (
     HAND_HALF_WIDTH_M,
+    MAX_SLOTS,
+    RING_MAX_M,
+    RING_MIN_M,
     SNAP_RADIUS_M,
     _hand_hits,
+    capacity,
     drop_slots,
     footprint_radius,
     occupied_envelopes,
@@ -86,11 +90,40 @@ def test_settle_snaps_near_the_slot_only():
     assert settle_pose(scenario, 99, obj, centre, 0.0) is None
 
 
-def test_generated_scenes_get_slots_clear_of_their_clutter():
-    scenario = generate_clutter(10, 0.3, 1)
+@pytest.mark.parametrize('args', [(10, 0.3, 1), (30, 0.3, 1), (30, 0.35, 3), (30, 0.1, 1)])
+def test_generated_scenes_have_room_for_30_relocations(args):
+    """30 distinct, non-overlapping slots in reach, clear of the clutter and of each other's hand.
+
+    Before #13 item 2 a 30-object scene had 3-5 slots (table edge 0.25 m behind the base, every
+    other ring candidate inside a neighbour's hand footprint).
+    """
+    scenario = generate_clutter(*args)
     slots = drop_slots(scenario)
-    assert len(slots) >= 8  # (20-30 objects on the generator's table leave 3-5: see report)
-    for slot in slots:
-        for obj in scenario.obstacles:
+    assert len(slots) == MAX_SLOTS == capacity(scenario) == 30
+    r = max(footprint_radius(o) for o in scenario.objects if o.role != 'static')
+    table = scenario.object('table')
+    for k, slot in enumerate(slots):
+        xy = np.array(slot.xy)
+        assert RING_MIN_M - 1e-9 <= np.hypot(*xy) <= RING_MAX_M + 1e-9  # in reach
+        assert abs(xy[0] - table.position[0]) + r <= table.size[0] / 2  # on the table
+        assert abs(xy[1] - table.position[1]) + r <= table.size[1] / 2
+        for earlier in slots[:k]:  # placing into slot k never touches an earlier slot
+            assert math.dist(slot.xy, earlier.xy) > 2 * r  # distinct, not overlapping
+            assert not _hand_hits(xy, slot.yaw, np.array(earlier.xy), r)
+        for obj in scenario.obstacles:  # nor an object of the clutter
             gap = HAND_HALF_WIDTH_M + footprint_radius(obj)
             assert math.dist(slot.xy, obj.position[:2]) > gap
+            assert not _hand_hits(xy, slot.yaw, np.array(obj.position[:2]), footprint_radius(obj))
+
+
+@pytest.mark.parametrize(('name', 'before'), [('s1', 12), ('s2', 9), ('s3', 9)])
+def test_ring_neighbours_stand_one_hand_width_apart(name, before):
+    """Every ring candidate is usable (the chord step rejected every other one: 12/9/9 slots)."""
+    slots = drop_slots(load_scenario(name))
+    assert len(slots) >= before + 6
+    gaps = []
+    for slot in slots:
+        rho = np.hypot(*slot.xy)
+        same = [o for o in slots if o is not slot and abs(np.hypot(*o.xy) - rho) < 1e-6]
+        gaps += [rho * abs(math.sin(math.remainder(o.yaw - slot.yaw, math.tau))) for o in same]
+    assert min(gaps) < 2 * HAND_HALF_WIDTH_M  # next candidates, not every other one

@@ -1,9 +1,17 @@
 """Cartesian path of a relocation (Sect. 3.1): sampling in ℝ³ with OMPL, side grasp only.
 
 No ROS import. The path is home → pre-grasp (free space: straight line, else RRTConnect) →
-grasp → lift → carry → place in the drop zone → retreat. The hand is a sphere in the free-space
-planner and a box swept along the approach axis in the corridor test; the STPIK check
+grasp → lift → carry → place in the drop zone → retreat. The STPIK check
 (:mod:`stpik_motion_planner.stpik`) then verifies the whole arm along the sampled path.
+
+The hand is the real open hand of the URDF (:class:`~.hand_model.HandModel`), so that "no
+Cartesian path" means the hand cannot pass (with the scene margin ``obstacle_min_distance_m``):
+
+* corridor test (orientation known): every hand body (palm, six finger links, the coaxial wrist
+  link) swept from the pre-grasp to the grasp, as exact convex hulls;
+* free-space sampling (orientation along the path not known): the largest ball inside the palm,
+  which the hand contains in every orientation;
+* poses of known orientation (:meth:`CartesianSampler.poses_free`): every hand body at the pose.
 """
 
 from __future__ import annotations
@@ -21,10 +29,9 @@ from ompl import util as ou
 
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import PlannerConfig
+from stpik_motion_planner.hand_model import HandModel
 
 ou.setLogLevel(ou.LOG_ERROR)
-HAND_BACK_M = 0.30  # hand + wrist length behind the EE origin swept by the corridor [m]
-HAND_CENTRE_M = 0.07  # hand sphere centre behind the EE origin [m]
 WORKSPACE = ((-1.0, 1.0), (-1.0, 1.0), (-0.2, 1.2))  # sampling bounds x, y, z [m]
 LINE_STEP_M = 0.02  # resolution of straight-line checks [m]
 # Jaco² j2s7s300 (KINOVA_FACTS.md DH): shoulder = joint 2 at D1 above the base; the wrist centre
@@ -127,52 +134,72 @@ def interpolate(
 
 
 class CartesianSampler:
-    """Plans the hand's Cartesian path in one scene (the object being moved excluded)."""
+    """Plans the hand's Cartesian path in one scene (the object being moved excluded).
 
-    def __init__(self, scene: SceneWorld, config: PlannerConfig) -> None:
+    Attributes:
+        scene: every body standing (the object being moved excluded), statics included.
+        movable: the non-static bodies, probed by the free-space ball.
+        hand: the open-hand geometry (:class:`~.hand_model.HandModel`).
+        validity_checks: free-space probe queries so far [-].
+    """
+
+    def __init__(self, scene: SceneWorld, config: PlannerConfig, hand: HandModel) -> None:
         self.scene = scene
         # The free-space probe ignores static bodies (the table): its height bounds keep it above
         # them, and the STPIK check verifies the real hand against every body.
         self.movable = SceneWorld(o for o in scene.objects.values() if o.role != 'static')
         self.config = config
-        radius = config.hand_radius_m
-        self._sphere_geometry = fcl.Sphere(radius)
-        self._sphere = fcl.CollisionObject(self._sphere_geometry, fcl.Transform())
+        self.hand = hand
+        self._ball_geometry = fcl.Sphere(hand.ball_radius)
+        self._ball = fcl.CollisionObject(self._ball_geometry, fcl.Transform())
         self.validity_checks = 0
 
     def point_free(self, point: np.ndarray) -> bool:
-        """True when the hand sphere centred at ``point`` [m] (3,) clears the scene."""
+        """True when the palm ball centred at ``point`` [m] (3,) clears the movable bodies."""
         self.validity_checks += 1
-        self._sphere.setTranslation(np.asarray(point, dtype=float))
+        self._ball.setTranslation(np.asarray(point, dtype=float))
         return not self.movable.clearance(
-            self._sphere, self._sphere_geometry, self.config.obstacle_min_distance_m
+            self._ball, self._ball_geometry, self.config.obstacle_min_distance_m
         )
 
-    def box_free(self, centre: np.ndarray, rotation: np.ndarray, size: np.ndarray) -> bool:
-        """True when a box (full ``size`` [m], at ``centre`` / ``rotation``) clears the scene."""
-        geometry = fcl.Box(*size)
-        body = fcl.CollisionObject(geometry, fcl.Transform(rotation, centre))
-        return not self.scene.clearance(body, geometry, self.config.obstacle_min_distance_m)
-
     def segment_free(self, a: np.ndarray, b: np.ndarray) -> bool:
-        """True when the hand sphere swept from ``a`` to ``b`` [m] clears the scene."""
+        """True when the palm ball swept from ``a`` to ``b`` [m] clears the movable bodies."""
         n = max(1, math.ceil(float(np.linalg.norm(b - a)) / LINE_STEP_M))
         return all(self.point_free(a + (b - a) * t) for t in np.linspace(0.0, 1.0, n + 1))
 
+    def _hits(self, parts: dict[str, fcl.Convex], pose: pin.SE3) -> list[str]:
+        """Ids of the scene bodies closer than the margin to a hand part placed at ``pose``."""
+        transform = fcl.Transform(pose.rotation, pose.translation)
+        margin = self.config.obstacle_min_distance_m
+        hit: list[str] = []
+        for geometry in parts.values():
+            body = fcl.CollisionObject(geometry, transform)
+            hit += [p.name_b for p in self.scene.clearance(body, geometry, margin)]
+        return sorted(set(hit))
+
     def poses_free(self, poses: list[pin.SE3]) -> bool:
-        """True when the hand sphere clears the scene at every EE pose of ``poses``."""
-        return all(
-            self.point_free(p.translation - HAND_CENTRE_M * p.rotation[:, 2]) for p in poses
-        )
+        """True when every hand body clears the scene (margin included) at every EE pose."""
+        return not any(self._hits(self.hand.at_pose, p) for p in poses)
+
+    def corridor_blockers(self, grasp: pin.SE3) -> list[str]:
+        """Ids of the bodies in the hand's approach corridor (pre-grasp → grasp), sorted.
+
+        The corridor is the real hand swept along the approach axis over the pre-grasp standoff
+        (:attr:`HandModel.swept`), grown by ``obstacle_min_distance_m``; [] when it is clear.
+
+        Raises:
+            ValueError: the hand model was swept over another standoff than the config's.
+        """
+        if not math.isclose(self.hand.standoff_m, self.config.pregrasp_standoff_m):
+            raise ValueError(
+                f'hand swept over {self.hand.standoff_m} m, pre-grasp standoff is '
+                f'{self.config.pregrasp_standoff_m} m'
+            )
+        return self._hits(self.hand.swept, grasp)
 
     def corridor_free(self, grasp: pin.SE3) -> bool:
-        """The hand's approach corridor (pre-grasp → grasp, wrist included) is clear."""
-        c = self.config
-        axis = grasp.rotation[:, 2]
-        back = c.pregrasp_standoff_m + HAND_BACK_M
-        centre = grasp.translation - axis * back / 2
-        size = np.array([c.hand_width_m, c.hand_width_m, back])
-        return self.box_free(centre, grasp.rotation, size)
+        """The hand's approach corridor (pre-grasp → grasp, wrist link included) is clear."""
+        return not self.corridor_blockers(grasp)
 
     def free_path(self, start: np.ndarray, goal: np.ndarray) -> list[np.ndarray]:
         """Hand-centre waypoints from ``start`` to ``goal`` [m]: straight, else RRTConnect.

@@ -39,8 +39,6 @@ RANGES: dict[str, tuple[float, float, str]] = {
     'grasp_depth_m': (-0.05, 0.05, 'EE origin beyond the object axis along the approach [m]'),
     'lift_clearance_m': (0.0, 0.5, 'carried object bottom above the tallest object [m]'),
     'retreat_m': (0.0, 0.5, 'retreat after release along -approach [m]'),
-    'hand_radius_m': (0.01, 0.3, 'sphere bounding the hand for Cartesian sampling [m]'),
-    'hand_width_m': (0.01, 0.3, 'width of the hand corridor swept on approach [m]'),
     'velocity_scale': (0.01, 1.0, 'fraction of the joint velocity limits used [-]'),
     'slot_spacing_m': (0.02, 0.5, 'distance between drop-zone slots [m]'),
 }
@@ -76,8 +74,6 @@ class PlannerConfig:
     grasp_depth_m: float = 0.0
     lift_clearance_m: float = 0.04
     retreat_m: float = 0.1  # the hand ends ≥ 25 mm (activation) from the placed object
-    hand_radius_m: float = 0.07
-    hand_width_m: float = 0.11
     velocity_scale: float = 0.5
     slot_spacing_m: float = 0.1
 

@@ -1,25 +1,38 @@
-"""The open hand from the URDF collision boxes, in the end-effector frame (no ROS import).
+"""The open hand from the URDF collision geometry, in the end-effector frame (no ROS import).
 
-Used to check the hand constants of :mod:`qtree_scene.placement` (slot layout) and the grasp
-opening of the planner (``OBJECT_TOO_BIG``). EE frame: z = approach, x = across the fingers,
-y = up in a side grasp (:func:`~stpik_motion_planner.cartesian_path.grasp_rotation`).
+Used by the Cartesian sampler (:class:`HandModel`: the approach corridor swept by the real hand,
+the free-space probe inside it), to check the hand constants of :mod:`qtree_scene.placement`
+(slot layout) and the grasp opening of the planner (``OBJECT_TOO_BIG``). EE frame: z = approach,
+x = across the fingers, y = up in a side grasp
+(:func:`~stpik_motion_planner.cartesian_path.grasp_rotation`).
+
+Measured on the j2s7s300 URDF (fingers at 0.2 rad): palm (link 7) x ∈ [−0.051, 0.054],
+y ± 0.047, z ∈ [−0.160, −0.039]; the open fingers reach x ∈ [−0.099, 0.104] but only over
+z ∈ [−0.066, 0.023]; link 6 (radius 0.032, coaxial with the EE z axis) spans z ∈ [−0.295, −0.160].
+The hand is therefore 0.20 m wide over its front 9 cm and 0.105 m wide behind.
 """
 
 from __future__ import annotations
 
 import itertools
 
+import fcl
 import numpy as np
+import pinocchio as pin
 from jaco2_description.model import EE_FRAME, Jaco2Model
+from scipy.spatial import ConvexHull
+
+RING_POINTS = 24  # polygon inscribed in a cylinder's circle (under by r·(1 − cos(π/24)) ≈ 1 %)
+WRIST_LINK = 'link_6'  # the last arm link, coaxial with the EE z axis whatever joint 7 does
 
 
 def _corners(geometry: object) -> np.ndarray:
     if hasattr(geometry, 'halfSide'):
         return np.array(list(itertools.product([-1.0, 1.0], repeat=3))) * geometry.halfSide
     r, h = float(geometry.radius), float(geometry.halfLength)
-    a = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
+    a = np.linspace(0.0, 2 * np.pi, RING_POINTS, endpoint=False)
     ring = np.c_[r * np.cos(a), r * np.sin(a)]
-    return np.vstack([np.c_[ring, np.full(24, z)] for z in (-h, h)])
+    return np.vstack([np.c_[ring, np.full(RING_POINTS, z)] for z in (-h, h)])
 
 
 def hand_points(robot: Jaco2Model) -> dict[str, np.ndarray]:
@@ -47,3 +60,93 @@ def finger_opening(robot: Jaco2Model) -> float:
     positive = min(p[:, 0].min() for p in tips if p[:, 0].mean() > 0)
     negative = max(p[:, 0].max() for p in tips if p[:, 0].mean() < 0)
     return float(positive - negative)
+
+
+def wrist_points(robot: Jaco2Model) -> np.ndarray | None:
+    """Points [m] (k, 3) of the wrist link coaxial with the EE z axis, EE frame, else None.
+
+    Joint 7 turns it about the EE z axis only, so a polygon inscribed in its circle stays inside
+    it for every joint-7 angle. None when the model has no such coaxial cylinder.
+    """
+    q = pin.neutral(robot.model)
+    pin.forwardKinematics(robot.model, robot.data, q)
+    pin.updateFramePlacements(robot.model, robot.data)
+    ee = robot.data.oMf[robot.frame_id(EE_FRAME)]
+    for link, g in zip(robot.collision_links, robot.geometry_model.geometryObjects, strict=True):
+        if not link.endswith(WRIST_LINK) or not hasattr(g.geometry, 'radius'):
+            continue
+        relative = ee.actInv(robot.data.oMi[g.parentJoint] * g.placement)
+        on_axis = np.linalg.norm(relative.translation[:2]) < 1e-6
+        if on_axis and abs(abs(relative.rotation[2, 2]) - 1.0) < 1e-6:
+            return np.array([relative.act(c) for c in _corners(g.geometry)])
+    return None
+
+
+def palm_ball(robot: Jaco2Model) -> tuple[np.ndarray, float]:
+    """Largest ball inside the palm box (link 7): centre [m] (3,) in the EE frame, radius [m].
+
+    Inside the hand whatever the hand's orientation: the free-space probe of the sampler, where
+    the orientation along the path is not known, so a blocked probe means a blocked hand.
+    """
+    ee = robot.model.frames[robot.frame_id(EE_FRAME)]
+    for link, g in zip(robot.collision_links, robot.geometry_model.geometryObjects, strict=True):
+        if link.endswith('link_7') and hasattr(g.geometry, 'halfSide'):
+            centre = ee.placement.actInv(g.placement.translation)
+            return np.asarray(centre, dtype=float), float(np.min(g.geometry.halfSide))
+    raise ValueError('the robot model has no palm box (link 7)')
+
+
+def convex(points: np.ndarray) -> fcl.Convex:
+    """python-fcl convex hull of ``points`` [m] (k, 3), in the points' frame."""
+    hull = ConvexHull(points)
+    used = np.unique(hull.simplices)
+    index = {int(v): i for i, v in enumerate(used)}
+    faces = [n for tri in hull.simplices for n in (3, *(index[int(v)] for v in tri))]
+    return fcl.Convex(points[used], len(hull.simplices), np.array(faces, dtype=np.int32))
+
+
+class HandModel:
+    """Hand-shaped probes of the Cartesian sampler, built once from the URDF.
+
+    Attributes:
+        parts: name -> points [m] (k, 3) in the EE frame of every body rigid with the EE (palm,
+            fingers) and of the coaxial wrist link.
+        standoff_m: length of the approach swept by :attr:`swept` [m].
+        swept: name -> convex hull of a part swept from ``standoff_m`` behind the EE pose (the
+            pre-grasp) to the EE pose (the grasp), EE frame: exact for the boxes (the sweep of a
+            convex body along a segment is the hull of its two ends), inscribed for cylinders.
+        at_pose: name -> convex hull of a part at the EE pose, EE frame.
+        ball_centre: centre [m] (3,) of :func:`palm_ball` in the EE frame.
+        ball_radius: its radius [m].
+    """
+
+    def __init__(self, robot: Jaco2Model, standoff_m: float) -> None:
+        self.parts = dict(hand_points(robot))
+        wrist = wrist_points(robot)
+        if wrist is not None:
+            self.parts[WRIST_LINK] = wrist
+        self.standoff_m = float(standoff_m)
+        back = np.array([0.0, 0.0, -self.standoff_m])
+        self.swept = {k: convex(np.vstack([p, p + back])) for k, p in self.parts.items()}
+        self.at_pose = {k: convex(p) for k, p in self.parts.items()}
+        self.ball_centre, self.ball_radius = palm_ball(robot)
+
+    def ball_point(self, pose: pin.SE3) -> np.ndarray:
+        """World centre [m] (3,) of the palm ball with the EE at ``pose``."""
+        return np.asarray(pose.act(self.ball_centre), dtype=float)
+
+    @property
+    def palm_front_m(self) -> float:
+        """Distance [m] of the palm's front face (link 7) behind the EE origin (0.039 m)."""
+        return -max(float(p[:, 2].max()) for k, p in self.parts.items() if k.endswith('link_7'))
+
+    @property
+    def half_width_m(self) -> float:
+        """Largest |x| (across the fingers) of the hand [m]."""
+        return max(float(np.max(np.abs(p[:, 0]))) for p in self.parts.values())
+
+    def __repr__(self) -> str:
+        return (
+            f'HandModel({len(self.parts)} parts, half width {self.half_width_m:.3f} m, '
+            f'palm ball r {self.ball_radius:.4f} m, standoff {self.standoff_m:.3f} m)'
+        )

@@ -35,7 +35,6 @@ from qtree_scene.scene import ObjectSpec, Scenario
 from stpik_motion_planner.blockers import BlockerFinder
 from stpik_motion_planner.cache import FeasibilityCache
 from stpik_motion_planner.cartesian_path import (
-    HAND_CENTRE_M,
     CartesianPath,
     CartesianSampler,
     approach_yaws,
@@ -56,6 +55,7 @@ from stpik_motion_planner.exceptions import (
     SelfCollision,
     VerificationFailed,
 )
+from stpik_motion_planner.hand_model import HandModel
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.scene_checks import validate_request, validate_scenario
 from stpik_motion_planner.stpik import Stpik
@@ -100,6 +100,7 @@ class MotionPlanner:
         self.config = config if config is not None else PlannerConfig()
         self.robot = model if model is not None else Jaco2Model()
         self.stpik = Stpik(self.robot, self.config)
+        self.hand = HandModel(self.robot, self.config.pregrasp_standoff_m)
         self.verifier = TrajectoryVerifier(self.robot)
         self.cache = FeasibilityCache()
         self.blockers = BlockerFinder(self)
@@ -187,7 +188,9 @@ class MotionPlanner:
             return PlanResult(False, bad.reason, str(bad), planning_time=_since(start))
         standing = self.planning_scene(object_id, relocated, envelopes=slot_index is None)
         scene = SceneWorld(standing)
-        sampler = CartesianSampler(scene, c)
+        if not math.isclose(self.hand.standoff_m, c.pregrasp_standoff_m):
+            self.hand = HandModel(self.robot, c.pregrasp_standoff_m)  # config changed since
+        sampler = CartesianSampler(scene, c, self.hand)
         slot = self.slot_position(index, obj)
         slot_yaw = drop_slots(self.scenario)[index].yaw
         centre = np.asarray(obj.position, dtype=float)
@@ -253,16 +256,22 @@ class MotionPlanner:
         # Mid-height, raised on short objects so the hand keeps its margin to the table.
         low = centre[2] - half + HAND_HALF_HEIGHT_M + c.obstacle_activation_m + 0.005
         grasp_z = min(max(centre[2], low), centre[2] + half - 0.01)
-        grasp = pin.SE3(rotation, np.r_[centre[:2], grasp_z] + c.grasp_depth_m * axis)
-        if not sampler.corridor_free(grasp):
+        depth = min(c.grasp_depth_m, self._palm_room(obj, yaw))
+        grasp = pin.SE3(rotation, np.r_[centre[:2], grasp_z] + depth * axis)
+        blockers = sampler.corridor_blockers(grasp)
+        if blockers:
             failures.append(
-                NoCartesianPath(obj.id, f'approach corridor at yaw {yaw:.2f} rad is blocked')
+                NoCartesianPath(
+                    obj.id,
+                    f'approach corridor of the open hand at yaw {yaw:.2f} rad is blocked by '
+                    + ', '.join(blockers),
+                )
             )
             return None
         pregrasp = pin.SE3(rotation, grasp.translation - c.pregrasp_standoff_m * axis)
-        offset = -HAND_CENTRE_M * axis  # hand sphere centre behind the EE origin [m]
+        # The palm ball, inside the hand at both ends (home and pre-grasp orientations).
         free = sampler.free_path(
-            self.home_pose.translation + offset, pregrasp.translation + offset
+            self.hand.ball_point(self.home_pose), self.hand.ball_point(pregrasp)
         )
         if not free:
             failures.append(
@@ -299,6 +308,20 @@ class MotionPlanner:
             options,
             yaw,
         )
+
+    def _palm_room(self, obj: ObjectSpec, yaw: float) -> float:
+        """Deepest EE origin beyond the object axis [m] keeping the palm off the object.
+
+        The palm's front face is :attr:`HandModel.palm_front_m` behind the EE origin; the object
+        reaches its half depth along the approach (a box turned by ``obj.yaw - yaw``) toward it.
+        Negative for deep boxes: the EE then stops short of the axis (3 cm cylinders: +4 mm).
+        """
+        if obj.shape == 'cylinder':
+            half = float(obj.radius)
+        else:
+            turn = obj.yaw - yaw
+            half = abs(obj.size[0] * math.cos(turn)) / 2 + abs(obj.size[1] * math.sin(turn)) / 2
+        return self.hand.palm_front_m - half - self.config.obstacle_min_distance_m
 
     def _track(
         self,
