@@ -1,0 +1,115 @@
+"""Planner answers on the exact search's questions, to prove a speed-up changes none. No ROS.
+
+:func:`exact_answers` runs the exact set search (:func:`qtree_task_planner.exact.solve_exact`,
+the questions the benchmark asks) on a fresh planner and records, per question ``(relocated set,
+object)``, the answer ``[feasible, reason]``, and beside it the CPU time of the check
+(``time.process_time``, robust to a shared machine) and a fingerprint of the returned motion.
+:func:`compare` lists the questions whose answer differs between two such records.
+
+The time limit is raised (:data:`TIME_LIMIT_S`) so that a loaded machine's ``TIMEOUT`` cannot
+make two runs of the same code differ; every other setting is the planner's default. The #14
+blocker search on infeasible answers is switched off (it does not change feasible/reason).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable
+
+import numpy as np
+from qtree_scene.scenario import load_scenario
+from qtree_task_planner.exact import solve_exact
+from qtree_task_planner.oracle import MotionPlannerOracle
+
+from stpik_motion_planner.config import PlannerConfig
+from stpik_motion_planner.planner import MotionPlanner
+
+SCENARIOS = ('s1', 's2', 's3')
+TIME_LIMIT_S = 600.0  # no TIMEOUT answers on a loaded machine [s]
+
+
+def question_key(relocated: Iterable[str], object_id: str) -> str:
+    """``'a,b|o'``: the sorted relocated set and the object (the cache's key as text)."""
+    return f'{",".join(sorted(relocated))}|{object_id}'
+
+
+def _fingerprint(result) -> list:
+    """Approach yaw [rad], number of samples and sum of the joint trajectory [rad] (rounded)."""
+    if not result.feasible:
+        return []
+    q = np.asarray(result.joint_trajectory)
+    return [round(float(result.approach_yaw), 6), len(q), round(float(q.sum()), 6)]
+
+
+def exact_answers(name: str, progress: Callable[[str], None] | None = None) -> dict:
+    """Answers, CPU times [s] and motion fingerprints of one scenario's exact search.
+
+    Returns:
+        ``{'answers': {key: [feasible, reason]}, 'cpu_s': {key: s}, 'reached_stpik': {key:
+        bool}, 'motion': {key: [yaw, n, sum]}, 'level': optimal level}``.
+    """
+    scenario = load_scenario(name)
+    planner = MotionPlanner(scenario, PlannerConfig(time_limit_s=TIME_LIMIT_S))
+    planner.blockers.annotate = lambda result, *_: result
+    out: dict = {'answers': {}, 'cpu_s': {}, 'reached_stpik': {}, 'motion': {}}
+    check = planner.check
+
+    def timed(object_id: str, relocated):
+        relocated = list(relocated)
+        key = question_key(relocated, object_id)
+        start = time.process_time()
+        result = check(object_id, relocated)
+        if not result.from_cache:
+            out['cpu_s'][key] = time.process_time() - start
+            out['answers'][key] = [bool(result.feasible), result.reason.name]
+            out['reached_stpik'][key] = result.timings.get('stpik', 0.0) > 0.0
+            out['motion'][key] = _fingerprint(result)
+            if progress is not None:
+                progress(f'{name} {key}: {result.reason.name}')
+        return result
+
+    planner.check = timed
+    oracle = MotionPlannerOracle(scenario, planner=planner)
+    ids = tuple(o.id for o in scenario.obstacles)
+    out['level'] = solve_exact(ids, scenario.target.id, oracle).level
+    return out
+
+
+def compare(before: dict, after: dict) -> dict:
+    """Questions answered differently (or asked by only one run), and motions that changed."""
+    changed, motions, missing = [], 0, []
+    for name in sorted(set(before) | set(after)):
+        a = before.get(name, {}).get('answers', {})
+        b = after.get(name, {}).get('answers', {})
+        for key in sorted(set(a) | set(b)):
+            if key not in a or key not in b:
+                missing.append(f'{name} {key}')
+            elif a[key] != b[key]:
+                changed.append(f'{name} {key}: {a[key]} -> {b[key]}')
+            elif before[name]['motion'].get(key) != after[name]['motion'].get(key):
+                motions += 1
+    total = sum(len(before.get(n, {}).get('answers', {})) for n in before)
+    return {'questions': total, 'changed': changed, 'missing': missing, 'motions_changed': motions}
+
+
+def timing_summary(record: dict) -> dict:
+    """Median / p95 CPU ms of the feasible and reached-STPIK checks of a record."""
+    feasible, reached = [], []
+    for part in record.values():
+        for key, seconds in part['cpu_s'].items():
+            if part['answers'][key][0]:
+                feasible.append(seconds)
+            if part['reached_stpik'][key]:
+                reached.append(seconds)
+
+    def stats(values: list[float]) -> dict:
+        if not values:
+            return {'n': 0}
+        return {
+            'n': len(values),
+            'median_ms': round(float(np.median(values)) * 1e3, 1),
+            'p95_ms': round(float(np.percentile(values, 95)) * 1e3, 1),
+            'total_s': round(float(np.sum(values)), 2),
+        }
+
+    return {'feasible': stats(feasible), 'reached_stpik': stats(reached)}

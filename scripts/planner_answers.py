@@ -1,0 +1,70 @@
+#!/usr/bin/env python3
+"""Record the motion planner's answers on the S1–S3 exact-search questions, or compare two records.
+
+Usage (env.sh sourced)::
+
+    python scripts/planner_answers.py record OUT.json [--scenarios s1 s2 s3]
+    python scripts/planner_answers.py compare BEFORE.json AFTER.json
+
+``record`` writes ``{scenario: {"answers": {"set|object": [feasible, reason]}, "cpu_s": ...,
+"reached_stpik": ..., "motion": ..., "level": m}}`` (see
+:mod:`stpik_motion_planner.benchmarking.answers`). ``compare`` prints the changed answers and the
+CPU-time medians of both records, and exits 1 when any answer changed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from stpik_motion_planner.benchmarking import answers
+from tqdm import tqdm
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest='command', required=True)
+    record = sub.add_parser('record', help='run the exact searches and write their answers')
+    record.add_argument('out', type=Path)
+    record.add_argument('--scenarios', nargs='+', default=list(answers.SCENARIOS))
+    cmp = sub.add_parser('compare', help='compare two records (exit 1 on a changed answer)')
+    cmp.add_argument('before', type=Path)
+    cmp.add_argument('after', type=Path)
+    args = parser.parse_args()
+    if args.command == 'record':
+        out = {}
+        with tqdm(desc='checks', unit='check') as bar:
+
+            def progress(text: str) -> None:
+                bar.set_postfix_str(text[:60])
+                bar.update()
+
+            for name in args.scenarios:
+                out[name] = answers.exact_answers(name, progress)
+        args.out.write_text(json.dumps(out, indent=1, sort_keys=True) + '\n')
+        for name, part in out.items():
+            print(f'{name}: level {part["level"]}, {len(part["answers"])} questions')
+        print(json.dumps(answers.timing_summary(out), indent=1))
+        return 0
+    try:
+        before = json.loads(args.before.read_text())
+        after = json.loads(args.after.read_text())
+    except (OSError, json.JSONDecodeError) as err:
+        parser.error(f'cannot read the records: {err}')
+    result = answers.compare(before, after)
+    print(
+        f'{len(result["changed"])} answers changed of {result["questions"]}; '
+        f'{len(result["missing"])} questions asked by one run only; '
+        f'{result["motions_changed"]} same answers with a changed motion'
+    )
+    for line in result['changed'] + result['missing']:
+        print('  ' + line)
+    for label, record in (('before', before), ('after', after)):
+        print(label, json.dumps(answers.timing_summary(record)))
+    return 1 if result['changed'] or result['missing'] else 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
