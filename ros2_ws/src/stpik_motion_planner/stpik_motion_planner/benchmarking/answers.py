@@ -46,12 +46,13 @@ def exact_answers(name: str, progress: Callable[[str], None] | None = None) -> d
 
     Returns:
         ``{'answers': {key: [feasible, reason]}, 'cpu_s': {key: s}, 'reached_stpik': {key:
-        bool}, 'motion': {key: [yaw, n, sum]}, 'level': optimal level}``.
+        bool}, 'motion': {key: [yaw, n, sum]}, 'stages_s': {key: {stage: wall s}}, 'level':
+        optimal level}``.
     """
     scenario = load_scenario(name)
     planner = MotionPlanner(scenario, PlannerConfig(time_limit_s=TIME_LIMIT_S))
     planner.blockers.annotate = lambda result, *_: result
-    out: dict = {'answers': {}, 'cpu_s': {}, 'reached_stpik': {}, 'motion': {}}
+    out: dict = {'answers': {}, 'cpu_s': {}, 'reached_stpik': {}, 'motion': {}, 'stages_s': {}}
     check = planner.check
 
     def timed(object_id: str, relocated):
@@ -64,6 +65,7 @@ def exact_answers(name: str, progress: Callable[[str], None] | None = None) -> d
             out['answers'][key] = [bool(result.feasible), result.reason.name]
             out['reached_stpik'][key] = result.timings.get('stpik', 0.0) > 0.0
             out['motion'][key] = _fingerprint(result)
+            out['stages_s'][key] = {k: round(v, 6) for k, v in result.timings.items()}
             if progress is not None:
                 progress(f'{name} {key}: {result.reason.name}')
         return result
@@ -93,12 +95,15 @@ def compare(before: dict, after: dict) -> dict:
 
 
 def timing_summary(record: dict) -> dict:
-    """Median / p95 CPU ms of the feasible and reached-STPIK checks of a record."""
-    feasible, reached = [], []
+    """Median / p95 CPU ms of the feasible and reached-STPIK checks of a record (and the
+    feasible checks' median wall ms per stage)."""
+    feasible, reached, stages = [], [], {}
     for part in record.values():
         for key, seconds in part['cpu_s'].items():
             if part['answers'][key][0]:
                 feasible.append(seconds)
+                for stage, value in part.get('stages_s', {}).get(key, {}).items():
+                    stages.setdefault(stage, []).append(value)
             if part['reached_stpik'][key]:
                 reached.append(seconds)
 
@@ -112,4 +117,8 @@ def timing_summary(record: dict) -> dict:
             'total_s': round(float(np.sum(values)), 2),
         }
 
-    return {'feasible': stats(feasible), 'reached_stpik': stats(reached)}
+    out = {'feasible': stats(feasible), 'reached_stpik': stats(reached)}
+    out['feasible']['stage_median_ms'] = {
+        k: round(float(np.median(v)) * 1e3, 1) for k, v in stages.items()
+    }
+    return out
