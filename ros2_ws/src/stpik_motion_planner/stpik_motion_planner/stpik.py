@@ -70,6 +70,25 @@ def damped_pinv(A: np.ndarray, damping: float, threshold: float) -> np.ndarray:
 RANK_TOLERANCE = 1e-6  # singular values below this are rank loss in the null-space projector [-]
 
 
+def pinv_pair(
+    A: np.ndarray, damping: float, threshold: float, tolerance: float = RANK_TOLERANCE
+) -> tuple[np.ndarray, np.ndarray]:
+    """(:func:`damped_pinv`, :func:`truncated_pinv`) of A (m, n), both (n, m), from ONE SVD.
+
+    Bit-identical to calling the two functions (same decomposition, same arithmetic).
+    """
+    if A.size == 0:
+        zero = np.zeros((A.shape[1], A.shape[0]))
+        return zero, zero.copy()
+    U, S, Vt = np.linalg.svd(A, full_matrices=False)
+    lam2 = np.where(threshold > S, damping**2 * (1.0 - (S / threshold) ** 2), 0.0)
+    denom = S**2 + lam2
+    s_damped = np.divide(S, denom, out=np.zeros_like(S), where=denom > 1e-12)
+    s_truncated = np.divide(1.0, S, out=np.zeros_like(S), where=tolerance <= S)
+    V = Vt.T
+    return (V * s_damped) @ U.T, (V * s_truncated) @ U.T
+
+
 def truncated_pinv(A: np.ndarray, tolerance: float = RANK_TOLERANCE) -> np.ndarray:
     """Undamped pseudo-inverse of A (m, n) → (n, m), singular values < ``tolerance`` dropped."""
     if A.size == 0:
@@ -98,12 +117,19 @@ def solve_hierarchy(levels: Sequence[TaskRows], n: int, damping: float, threshol
     """  # noqa: E501
     dq = np.zeros(n)
     N = np.eye(n)
-    for rows in levels:
-        if rows.dim == 0:
-            continue
+    used = [rows for rows in levels if rows.dim]
+    for index, rows in enumerate(used):
+        if rows.identity:
+            # J_i = I: J_i N = N is an orthogonal projector (N_i is built with the undamped,
+            # truncated pseudo-inverse), whose singular values are 0 or 1 ≥ threshold, so
+            # (J_i N)^†_λ = N and the step is closed-form, no SVD; nothing is left below it.
+            return dq + N @ (rows.error - dq)
         JN = rows.jacobian @ N
-        dq = dq + damped_pinv(JN, damping, threshold) @ (rows.error - rows.jacobian @ dq)
-        N = N - truncated_pinv(JN) @ JN
+        if index == len(used) - 1:  # the last level's projector is never used
+            return dq + damped_pinv(JN, damping, threshold) @ (rows.error - rows.jacobian @ dq)
+        damped, truncated = pinv_pair(JN, damping, threshold)
+        dq = dq + damped @ (rows.error - rows.jacobian @ dq)
+        N = N - truncated @ JN
     return dq
 
 

@@ -39,6 +39,7 @@ class Kinematics:
     body_joint: dict[str, int]
     self_pairs: list[Proximity] = field(default_factory=list)
     scene_pairs: list[Proximity] = field(default_factory=list)
+    _joint_jacobians: dict[int, np.ndarray] = field(default_factory=dict, repr=False)
 
     def point_jacobian(self, body: str, point: np.ndarray) -> np.ndarray:
         """Jacobian of the world velocity of a point fixed to ``body``, shape (3, 7).
@@ -48,7 +49,10 @@ class Kinematics:
             point: the point in the world frame [m], shape (3,).
         """
         joint = self.body_joint[body]
-        J = pin.getJointJacobian(self.model, self.data, joint, pin.LOCAL_WORLD_ALIGNED)
+        J = self._joint_jacobians.get(joint)
+        if J is None:  # once per joint and configuration
+            J = pin.getJointJacobian(self.model, self.data, joint, pin.LOCAL_WORLD_ALIGNED)
+            self._joint_jacobians[joint] = J
         r = point - self.data.oMi[joint].translation
         # v_p = v_o + ω × r = J_v q̇ − [r]× J_ω q̇
         return J[:3] - pin.skew(r) @ J[3:]
@@ -62,11 +66,14 @@ class TaskRows:
         jacobian: J_i, shape (m, 7).
         error: K_i σ̃_i (already scaled by the gain), shape (m,).
         labels: one name per row (for messages).
+        identity: True when ``jacobian`` is the identity (n, n) (the posture task), so
+            :func:`~stpik_motion_planner.stpik.solve_hierarchy` may take its closed form.
     """
 
     jacobian: np.ndarray
     error: np.ndarray
     labels: tuple[str, ...]
+    identity: bool = False
 
     @property
     def dim(self) -> int:
