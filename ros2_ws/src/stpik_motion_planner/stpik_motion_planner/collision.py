@@ -167,14 +167,20 @@ class RobotBodies:
         self.names: dict[int, str] = {}
         self.bodies: list[fcl.CollisionObject] = []
         self._geometries: list[fcl.CollisionGeometry] = []
+        self._transforms: list[fcl.Transform] = []
         for name, g in zip(self.link_names, geometry_model.geometryObjects, strict=True):
             geometry = _fcl_geometry(g.geometry)
             self.names[id(geometry)] = name
             self._geometries.append(geometry)
+            self._transforms.append(fcl.Transform())
             self.bodies.append(fcl.CollisionObject(geometry, fcl.Transform()))
+        # Bounding sphere of each body about its centre (the geometry frame's origin) [m].
+        self._radii = np.array([_sphere_radius(g) for g in self._geometries])
+        self._centres = np.zeros((len(self.bodies) + 1, 3))  # last row: the carried object
         self.attached: fcl.CollisionObject | None = None
         self.attached_radius = 0.0  # bounding radius of the carried object [m]
         self._attached_offset = pin.SE3.Identity()
+        self._attached_transform = fcl.Transform()
         self._build_managers()
 
     def _group(self, keys: tuple[str, ...]) -> list[fcl.CollisionObject]:
@@ -184,24 +190,24 @@ class RobotBodies:
         return out
 
     def _build_managers(self) -> None:
-        # One (body, later partners) manager pair per body: their cross pairs are exactly the
-        # allowed self-hit pairs, so no distance is computed for adjacent or rigid pairs.
+        # The self-hit pairs as index arrays into [*bodies, attached] (pair order: first body,
+        # then partner, ascending): no distance is computed for adjacent or rigid pairs, and a
+        # bounding-sphere test in numpy skips the far ones before any fcl call.
         names = [*self.link_names, 'attached']
-        objects = [*self.bodies, self.attached]
-        self._self_pairs = []
-        for i, a in enumerate(names):
-            if objects[i] is None:
-                continue
-            partners = [
-                objects[j]
-                for j in range(i + 1, len(names))
-                if objects[j] is not None and frozenset((a, names[j])) in self._allowed
-            ]
-            if partners:
-                self._self_pairs.append((_manager([objects[i]]), _manager(partners)))
+        present = [*([True] * len(self.bodies)), self.attached is not None]
+        pairs = [
+            (i, j)
+            for i in range(len(names))
+            for j in range(i + 1, len(names))
+            if present[i] and present[j] and frozenset((names[i], names[j])) in self._allowed
+        ]
+        self._pair_a = np.array([i for i, _ in pairs], dtype=int)
+        self._pair_b = np.array([j for _, j in pairs], dtype=int)
+        self._pair_names = [(names[i], names[j]) for i, j in pairs]
+        self._objects = [*self.bodies, self.attached]
+        self._all_radii = np.r_[self._radii, self.attached_radius]
         keys = tuple(_short(n) for n in self.link_names if _short(n) not in _NOT_VS_SCENE)
         self._scene_manager = _manager(self._group((*keys, 'attached')))
-        self._managers = [m for pair in self._self_pairs for m in pair] + [self._scene_manager]
 
     def attach(self, obj: ObjectSpec, transform_obj_to_ee: pin.SE3, settle_m: float = 0.0) -> None:
         """Carry ``obj`` rigidly at ``transform_obj_to_ee`` (its pose in the EE frame).
@@ -234,21 +240,44 @@ class RobotBodies:
 
     def place(self, oMg: list[pin.SE3], world_ee: pin.SE3) -> None:
         """Move the bodies to the geometry placements ``oMg`` and the EE pose ``world_ee``."""
-        for body, placement in zip(self.bodies, oMg, strict=True):
-            body.setTransform(fcl.Transform(placement.rotation, placement.translation))
+        centres = self._centres
+        for index, (body, tf, placement) in enumerate(
+            zip(self.bodies, self._transforms, oMg, strict=True)
+        ):
+            translation = placement.translation
+            tf.setRotation(placement.rotation)
+            tf.setTranslation(translation)
+            body.setTransform(tf)
+            centres[index] = translation
         if self.attached is not None:
             world_obj = world_ee * self._attached_offset
-            self.attached.setTransform(fcl.Transform(world_obj.rotation, world_obj.translation))
-        for manager in self._managers:
-            manager.update()
+            tf = self._attached_transform
+            tf.setRotation(world_obj.rotation)
+            tf.setTranslation(world_obj.translation)
+            self.attached.setTransform(tf)
+            centres[-1] = world_obj.translation
+        self._scene_manager.update()
 
     def self_proximities(self, threshold: float) -> list[Proximity]:
-        """Pairs of the self-hit list closer than ``threshold`` [m] (one query per body)."""
+        """Pairs of the self-hit list closer than ``threshold`` [m].
+
+        A pair whose bounding spheres are ``threshold`` apart or more cannot be closer, so only
+        the others reach ``fcl.distance`` (the result is the same set as a query of every pair).
+        """
+        a, b = self._pair_a, self._pair_b
+        if a.size == 0:
+            return []
+        gap = np.linalg.norm(self._centres[a] - self._centres[b], axis=1)
+        gap -= self._all_radii[a] + self._all_radii[b]
         found: list[Proximity] = []
-        for manager_a, manager_b in self._self_pairs:
-            data = _Collector(self.names, threshold)
-            manager_a.distance(manager_b, data, _collect)
-            found += data.found
+        objects = self._objects
+        for k in np.flatnonzero(gap < threshold):
+            result = fcl.DistanceResult()
+            distance = fcl.distance(objects[a[k]], objects[b[k]], _REQUEST, result)
+            if distance < threshold:
+                name_a, name_b = self._pair_names[k]
+                pa, pb = result.nearest_points
+                found.append(Proximity(name_a, name_b, distance, pa, pb))
         return found
 
     def scene_proximities(self, scene: SceneWorld, threshold: float) -> list[Proximity]:
@@ -277,6 +306,15 @@ def _robot_first(p: Proximity, scene: SceneWorld) -> Proximity:
 def _short(link: str) -> str:
     short = link.removeprefix('j2s7s300_')
     return 'finger' if short.startswith('link_finger') else short
+
+
+def _sphere_radius(geometry: fcl.CollisionGeometry) -> float:
+    """Radius [m] of the sphere about an fcl primitive's centre that contains it."""
+    if isinstance(geometry, fcl.Cylinder):
+        return math.hypot(geometry.radius, geometry.lz / 2)
+    if isinstance(geometry, fcl.Box):
+        return 0.5 * float(np.linalg.norm(geometry.side))
+    return float(geometry.radius)
 
 
 def _fcl_geometry(geometry: object) -> fcl.CollisionGeometry:
