@@ -119,11 +119,6 @@ def solve_hierarchy(levels: Sequence[TaskRows], n: int, damping: float, threshol
     N = np.eye(n)
     used = [rows for rows in levels if rows.dim]
     for index, rows in enumerate(used):
-        if rows.identity:
-            # J_i = I: J_i N = N is an orthogonal projector (N_i is built with the undamped,
-            # truncated pseudo-inverse), whose singular values are 0 or 1 ≥ threshold, so
-            # (J_i N)^†_λ = N and the step is closed-form, no SVD; nothing is left below it.
-            return dq + N @ (rows.error - dq)
         JN = rows.jacobian @ N
         if index == len(used) - 1:  # the last level's projector is never used
             return dq + damped_pinv(JN, damping, threshold) @ (rows.error - rows.jacobian @ dq)
@@ -397,10 +392,10 @@ class Stpik:
         """
         origins = np.array([k.data.oMi[j].translation for j in range(1, 8)])  # (7, 3)
         axes = np.array([k.data.oMi[j].rotation[:, 2] for j in range(1, 8)])  # RZ joints (7, 3)
-        centres = np.array([m.translation for m in self.geometry_data.oMg])  # (G, 3)
         joints, radii = self._body_joint, self._body_radius
+        centres = self.bodies.centres[: len(joints)]  # (G, 3), placed by kinematics
         if self.bodies.attached is not None:
-            centres = np.vstack([centres, self.bodies.attached.getTranslation()])
+            centres = self.bodies.centres
             joints = np.r_[joints, 7]
             radii = np.r_[radii, self.bodies.attached_radius]
         offset = centres[None] - origins[:, None]  # (7, G, 3)

@@ -25,4 +25,4 @@ class PostureTask(Task):
 
     def compute(self, k: Kinematics) -> TaskRows:
         """Rows (I (7, 7), K (q_ref − q))."""
-        return TaskRows(self._eye, self.gain * (self.reference - k.q), self._labels, identity=True)
+        return TaskRows(self._eye, self.gain * (self.reference - k.q), self._labels)

@@ -66,14 +66,11 @@ class TaskRows:
         jacobian: J_i, shape (m, 7).
         error: K_i σ̃_i (already scaled by the gain), shape (m,).
         labels: one name per row (for messages).
-        identity: True when ``jacobian`` is the identity (n, n) (the posture task), so
-            :func:`~stpik_motion_planner.stpik.solve_hierarchy` may take its closed form.
     """
 
     jacobian: np.ndarray
     error: np.ndarray
     labels: tuple[str, ...]
-    identity: bool = False
 
     @property
     def dim(self) -> int:
