@@ -4,12 +4,14 @@
 Usage (env.sh sourced)::
 
     python scripts/planner_answers.py record OUT.json [--scenarios s1 s2 s3]
-    python scripts/planner_answers.py compare BEFORE.json AFTER.json
+    python scripts/planner_answers.py compare --before A.json [B.json ...] --after C.json [...]
 
 ``record`` writes ``{scenario: {"answers": {"set|object": [feasible, reason]}, "cpu_s": ...,
 "reached_stpik": ..., "motion": ..., "level": m}}`` (see
-:mod:`stpik_motion_planner.benchmarking.answers`). ``compare`` prints the changed answers and the
-CPU-time medians of both records, and exits 1 when any answer changed.
+:mod:`stpik_motion_planner.benchmarking.answers`). ``compare`` prints the answers that
+differ between the first record and any other, and the CPU-time medians of both sides (per
+question the minimum over that side's records: repeated runs filter out a shared machine's
+interference); it exits 1 when any answer changed.
 """
 
 from __future__ import annotations
@@ -30,8 +32,8 @@ def main() -> int:
     record.add_argument('out', type=Path)
     record.add_argument('--scenarios', nargs='+', default=list(answers.SCENARIOS))
     cmp = sub.add_parser('compare', help='compare two records (exit 1 on a changed answer)')
-    cmp.add_argument('before', type=Path)
-    cmp.add_argument('after', type=Path)
+    cmp.add_argument('--before', type=Path, nargs='+', required=True)
+    cmp.add_argument('--after', type=Path, nargs='+', required=True)
     args = parser.parse_args()
     if args.command == 'record':
         out = {}
@@ -49,21 +51,25 @@ def main() -> int:
         print(json.dumps(answers.timing_summary(out), indent=1))
         return 0
     try:
-        before = json.loads(args.before.read_text())
-        after = json.loads(args.after.read_text())
+        before = [json.loads(path.read_text()) for path in args.before]
+        after = [json.loads(path.read_text()) for path in args.after]
     except (OSError, json.JSONDecodeError) as err:
         parser.error(f'cannot read the records: {err}')
-    result = answers.compare(before, after)
-    print(
-        f'{len(result["changed"])} answers changed of {result["questions"]}; '
-        f'{len(result["missing"])} questions asked by one run only; '
-        f'{result["motions_changed"]} same answers with a changed motion'
-    )
-    for line in result['changed'] + result['missing']:
-        print('  ' + line)
-    for label, record in (('before', before), ('after', after)):
-        print(label, json.dumps(answers.timing_summary(record)))
-    return 1 if result['changed'] or result['missing'] else 0
+    changed = missing = 0
+    for other in [*before[1:], *after]:
+        result = answers.compare(before[0], other)
+        changed += len(result['changed'])
+        missing += len(result['missing'])
+        print(
+            f'{len(result["changed"])} answers changed of {result["questions"]}; '
+            f'{len(result["missing"])} questions asked by one run only; '
+            f'{result["motions_changed"]} same answers with a changed motion'
+        )
+        for line in result['changed'] + result['missing']:
+            print('  ' + line)
+    for label, records in (('before', before), ('after', after)):
+        print(label, json.dumps(answers.timing_summary(answers.fastest(records))))
+    return 1 if changed or missing else 0
 
 
 if __name__ == '__main__':

@@ -111,6 +111,18 @@ def compare(before: dict, after: dict) -> dict:
     return {'questions': total, 'changed': changed, 'missing': missing, 'motions_changed': motions}
 
 
+def fastest(records: list[dict]) -> dict:
+    """The first record with, per question, the smallest CPU time over ``records`` (runs of the
+    same code; the minimum filters out interference of other processes)."""
+    out = {name: {**part, 'cpu_s': dict(part['cpu_s'])} for name, part in records[0].items()}
+    for record in records[1:]:
+        for name, part in out.items():
+            for key, seconds in record.get(name, {}).get('cpu_s', {}).items():
+                if key in part['cpu_s']:
+                    part['cpu_s'][key] = min(part['cpu_s'][key], seconds)
+    return out
+
+
 def timing_summary(record: dict) -> dict:
     """Median / p95 CPU ms of the feasible and reached-STPIK checks of a record (and the
     feasible checks' median wall ms per stage)."""
