@@ -153,6 +153,7 @@ class Stpik:
         self._body_radius = np.array(
             [_bounding_radius(g.geometry) for g in self.geometry_model.geometryObjects]
         )
+        self._moved: dict[int, np.ndarray] = {}  # body_reach's (7, G) masks by body count
         self._body_index = {name: i for i, name in enumerate(robot.collision_links)}
         self._body_index['attached'] = len(robot.collision_links)
         self.ee_frame = self.model.getFrameId(EE_FRAME)
@@ -390,8 +391,9 @@ class Stpik:
 
         To first order a step dq moves no point of body g farther than Σ_j |dq_j| R_{j,g}.
         """
-        origins = np.array([k.data.oMi[j].translation for j in range(1, 8)])  # (7, 3)
-        axes = np.array([k.data.oMi[j].rotation[:, 2] for j in range(1, 8)])  # RZ joints (7, 3)
+        frames = np.array([m.homogeneous for m in k.data.oMi[1:8]])  # joints 1..7 (7, 4, 4)
+        origins = frames[:, :3, 3]  # (7, 3)
+        axes = frames[:, :3, 2]  # RZ joints (7, 3)
         joints, radii = self._body_joint, self._body_radius
         centres = self.bodies.centres[: len(joints)]  # (G, 3), placed by kinematics
         if self.bodies.attached is not None:
@@ -402,7 +404,9 @@ class Stpik:
         along = np.einsum('jgk,jk->jg', offset, axes)
         to_axis = np.linalg.norm(offset - along[..., None] * axes[:, None], axis=2)
         distance = to_axis + radii[None]
-        moved = joints[None] >= np.arange(1, 8)[:, None]
+        moved = self._moved.get(len(joints))
+        if moved is None:  # depends on the bodies only (with / without the carried object)
+            moved = self._moved[len(joints)] = joints[None] >= np.arange(1, 8)[:, None]
         return np.where(moved, distance, 0.0), joints
 
     def step_scale(self, k: Kinematics, dq: np.ndarray) -> float:
@@ -467,13 +471,25 @@ class Stpik:
         for q in out:
             if time.perf_counter() > deadline:
                 raise PlanningTimeout.past(deadline, c.time_limit_s)
-            k = self.kinematics(q, scene, lookahead=0.0)
-            for p in k.self_pairs:
-                if p.distance < c.self_activation_m:
-                    raise SelfCollision(p.name_a, p.name_b, p.distance)
-            for p in k.scene_pairs:
-                if p.distance < c.obstacle_activation_m:
-                    raise SceneCollision(p.name_a, p.name_b, p.distance)
+            # Collision checks only: placements without Jacobians (bit-identical to those of
+            # kinematics), self pairs first, the scene only when no self pair is too close.
+            pin.forwardKinematics(self.model, self.data, q)
+            pin.updateFramePlacements(self.model, self.data)
+            pin.updateGeometryPlacements(
+                self.model, self.data, self.geometry_model, self.geometry_data
+            )
+            start = time.perf_counter()
+            self.bodies.place(self.geometry_data.oMg, self.data.oMf[self.ee_frame])
+            found = self.bodies.self_proximities(c.self_activation_m)
+            if not found:
+                hits = self.bodies.scene_proximities(scene, c.obstacle_activation_m)
+            self.collision_time += time.perf_counter() - start
+            if found:
+                p = found[0]
+                raise SelfCollision(p.name_a, p.name_b, p.distance)
+            if hits:
+                p = hits[0]
+                raise SceneCollision(p.name_a, p.name_b, p.distance)
         return out
 
     def _check(
