@@ -142,6 +142,8 @@ class NodeProcess:
             try:
                 self.process.wait(timeout_s)
             except subprocess.TimeoutExpired:
+                self.process.send_signal(signal.SIGUSR1)  # the node dumps its thread stacks
+                time.sleep(1.0)
                 self.process.kill()
                 self.process.wait()
         self._log.close()

@@ -85,7 +85,7 @@ def launch(ros_domain: int, tmp_path: Path) -> Iterator[Callable[..., NodeProces
         was_alive = node.alive()
         code = node.stop()
         if was_alive and code != 0:  # log_text() still reads the (closed) log: last lines
-            failures.append(f'{node.name} exited with {code}:\n{node.log_text()[-2000:]}')
+            failures.append(f'{node.name} exited with {code}:\n{node.log_text()[-6000:]}')
     assert not failures, '\n'.join(failures)
 
 

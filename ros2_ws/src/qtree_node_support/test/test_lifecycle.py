@@ -71,3 +71,38 @@ def test_startup_error_gives_exit_code_2() -> None:
         raise ValueError('scenario: no such scenario')
 
     assert run_node(bad_start, startup_errors=(ValueError,), context=Context()) == 2
+
+
+def test_exit_watchdog_ends_a_process_kept_alive_by_a_stuck_thread():
+    """Soak: once in 10 runs a cleaned-up motion planner stayed alive until SIGKILL (-9)."""
+    import subprocess
+    import sys
+
+    script = (
+        'import threading\n'
+        'from qtree_node_support.lifecycle import start_exit_watchdog\n'
+        'threading.Thread(target=threading.Event().wait).start()  # never returns\n'
+        'start_exit_watchdog(0, 0.5)\n'
+    )
+    done = subprocess.run(
+        [sys.executable, '-c', script], capture_output=True, text=True, timeout=30
+    )
+    assert done.returncode == 0
+    assert 'forced' in done.stderr and 'Thread' in done.stderr  # the stacks are shown
+
+
+def test_exit_watchdog_keeps_the_code_and_never_delays_a_clean_exit():
+    import subprocess
+    import sys
+    import time
+
+    script = (
+        'import sys\n'
+        'from qtree_node_support.lifecycle import start_exit_watchdog\n'
+        'start_exit_watchdog(3, 20.0)\n'
+        'sys.exit(3)\n'
+    )
+    start = time.monotonic()
+    done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True)
+    assert done.returncode == 3 and 'forced' not in done.stderr
+    assert time.monotonic() - start < 15.0
