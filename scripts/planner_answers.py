@@ -31,9 +31,13 @@ def main() -> int:
     record = sub.add_parser('record', help='run the exact searches and write their answers')
     record.add_argument('out', type=Path)
     record.add_argument('--scenarios', nargs='+', default=list(answers.SCENARIOS))
+    record.add_argument(
+        '--profile', action='store_true', help='run under cProfile (CPU clock), store phases'
+    )
     cmp = sub.add_parser('compare', help='compare two records (exit 1 on a changed answer)')
     cmp.add_argument('--before', type=Path, nargs='+', required=True)
     cmp.add_argument('--after', type=Path, nargs='+', required=True)
+    cmp.add_argument('--out', type=Path, help='write the comparison as JSON (benchmark report)')
     args = parser.parse_args()
     if args.command == 'record':
         out = {}
@@ -43,10 +47,13 @@ def main() -> int:
                 bar.set_postfix_str(text[:60])
                 bar.update()
 
-            for name in args.scenarios:
-                out[name] = answers.exact_answers(name, progress)
+            if args.profile:
+                out = answers.profiled_answers(args.scenarios, progress)
+            else:
+                for name in args.scenarios:
+                    out[name] = answers.exact_answers(name, progress)
         args.out.write_text(json.dumps(out, indent=1, sort_keys=True) + '\n')
-        for name, part in out.items():
+        for name, part in answers.scenarios(out).items():
             print(f'{name}: level {part["level"]}, {len(part["answers"])} questions')
         print(json.dumps(answers.timing_summary(out), indent=1))
         return 0
@@ -55,11 +62,12 @@ def main() -> int:
         after = [json.loads(path.read_text()) for path in args.after]
     except (OSError, json.JSONDecodeError) as err:
         parser.error(f'cannot read the records: {err}')
-    changed = missing = 0
+    changed, missing, questions = [], [], 0
     for other in [*before[1:], *after]:
         result = answers.compare(before[0], other)
-        changed += len(result['changed'])
-        missing += len(result['missing'])
+        changed += result['changed']
+        missing += result['missing']
+        questions = result['questions']
         print(
             f'{len(result["changed"])} answers changed of {result["questions"]}; '
             f'{len(result["missing"])} questions asked by one run only; '
@@ -67,8 +75,20 @@ def main() -> int:
         )
         for line in result['changed'] + result['missing']:
             print('  ' + line)
+    summary = {
+        'questions': questions,
+        'scenarios': sorted(answers.scenarios(before[0])),
+        'answers_changed': len(changed) + len(missing),
+        'runs': {'before': len(before), 'after': len(after)},
+    }
     for label, records in (('before', before), ('after', after)):
-        print(label, json.dumps(answers.timing_summary(answers.fastest(records))))
+        summary[label] = answers.timing_summary(answers.fastest(records))
+        summary[label]['profile_cpu_s'] = next(
+            (r['_profile'] for r in records if '_profile' in r), {}
+        )
+        print(label, json.dumps(summary[label]))
+    if args.out is not None:
+        args.out.write_text(json.dumps(summary, indent=2) + '\n')
     return 1 if changed or missing else 0
 
 

@@ -14,8 +14,11 @@ blocker search on infeasible answers is switched off (it does not change feasibl
 
 from __future__ import annotations
 
+import cProfile
+import pstats
 import time
 from collections.abc import Callable, Iterable
+from pathlib import Path
 
 import numpy as np
 from qtree_scene.generator import generate_clutter
@@ -25,6 +28,7 @@ from qtree_task_planner.exact import solve_exact
 from qtree_task_planner.exceptions import SearchLimitExceededError
 from qtree_task_planner.oracle import MotionPlannerOracle
 
+from stpik_motion_planner.benchmarking.figures import PHASES
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.planner import MotionPlanner
 
@@ -97,6 +101,7 @@ def exact_answers(name: str, progress: Callable[[str], None] | None = None) -> d
 def compare(before: dict, after: dict) -> dict:
     """Questions answered differently (or asked by only one run), and motions that changed."""
     changed, motions, missing = [], 0, []
+    before, after = scenarios(before), scenarios(after)
     for name in sorted(set(before) | set(after)):
         a = before.get(name, {}).get('answers', {})
         b = after.get(name, {}).get('answers', {})
@@ -114,7 +119,10 @@ def compare(before: dict, after: dict) -> dict:
 def fastest(records: list[dict]) -> dict:
     """The first record with, per question, the smallest CPU time over ``records`` (runs of the
     same code; the minimum filters out interference of other processes)."""
-    out = {name: {**part, 'cpu_s': dict(part['cpu_s'])} for name, part in records[0].items()}
+    out = {
+        name: {**part, 'cpu_s': dict(part['cpu_s'])}
+        for name, part in scenarios(records[0]).items()
+    }
     for record in records[1:]:
         for name, part in out.items():
             for key, seconds in record.get(name, {}).get('cpu_s', {}).items():
@@ -127,7 +135,7 @@ def timing_summary(record: dict) -> dict:
     """Median / p95 CPU ms of the feasible and reached-STPIK checks of a record (and the
     feasible checks' median wall ms per stage)."""
     feasible, reached, stages = [], [], {}
-    for part in record.values():
+    for part in scenarios(record).values():
         for key, seconds in part['cpu_s'].items():
             if part['answers'][key][0]:
                 feasible.append(seconds)
@@ -151,3 +159,30 @@ def timing_summary(record: dict) -> dict:
         k: round(float(np.median(v)) * 1e3, 1) for k, v in stages.items()
     }
     return out
+
+
+def profiled_answers(names: Iterable[str], progress: Callable[[str], None] | None = None) -> dict:
+    """:func:`exact_answers` of every scenario under cProfile with a CPU clock.
+
+    Returns:
+        ``{scenario: record, ..., '_profile': {phase: cumulative CPU s}}`` (phases of
+        :data:`~stpik_motion_planner.benchmarking.figures.PHASES`, summed over the scenarios).
+    """
+    profiler = cProfile.Profile(time.process_time)
+    out = {}
+    profiler.enable()
+    for name in names:
+        out[name] = exact_answers(name, progress)
+    profiler.disable()
+    phases: dict[str, float] = {}
+    for (file, _, function), (_, _, _, cumulative, _) in pstats.Stats(profiler).stats.items():
+        phase = PHASES.get((Path(file).name, function))
+        if phase is not None:
+            phases[phase] = round(phases.get(phase, 0.0) + cumulative, 3)
+    out['_profile'] = phases
+    return out
+
+
+def scenarios(record: dict) -> dict:
+    """The per-scenario parts of a record (without ``'_profile'``)."""
+    return {name: part for name, part in record.items() if not name.startswith('_')}
