@@ -108,6 +108,8 @@ class SetBasedTask(Task):
         sigma, jacobian, lower, upper, labels = self.evaluate(k)
         below, above = sigma < lower, sigma > upper
         rows = np.flatnonzero(below | above)
+        if rows.size == 0:  # nothing outside its valid set (the usual case)
+            return TaskRows(jacobian[:0], np.zeros(0), ())
         desired = np.where(below, lower, upper)[rows]
         return TaskRows(
             jacobian[rows],
