@@ -155,7 +155,7 @@ def timing_summary(record: dict) -> dict:
         }
 
     out = {'feasible': stats(feasible), 'reached_stpik': stats(reached)}
-    out['feasible']['stage_median_ms'] = {
+    out['feasible']['stage_median_wall_ms'] = {
         k: round(float(np.median(v)) * 1e3, 1) for k, v in stages.items()
     }
     return out

@@ -197,7 +197,13 @@ def notes(s: dict) -> str:
         'now includes the independent verification of its trajectory (stage "verify") and '
         'STPIK steps bounded in Cartesian terms (more, shorter steps); the #14 blocker search '
         "on infeasible answers is switched off here (not part of the check); the machine's load "
-        f'during the run: {s["load_average"]} (2 cores shared), so the timings are upper bounds.',
+        f'during the run: {s["load_average"]} (2 cores shared), so the timings are upper bounds'
+        + (
+            ' (wall clock; the same questions before / after the speed work in CPU time: '
+            '"Speed work" above).'
+            if s.get('speed')
+            else '.'
+        ),
         f'- **Levels.** s1/s2/s3: {levels.get("s1")}/{levels.get("s2")}/{levels.get("s3")} '
         '(paper 4/5/6).',
     ]
