@@ -142,11 +142,45 @@ def ros_node(ros_domain: int) -> Iterator[Any]:
     node.spin_until = spin_until
     node.call = call
     node.wait_matched = wait_matched
+    node.wait_action_answering = lambda action, timeout_s=30.0: wait_action_answering(
+        action, spin_until, timeout_s
+    )
     node.executor_ = executor
     yield node
     executor.shutdown()
     node.destroy_node()
     rclpy.try_shutdown(context=context)
+
+
+PROBE_GOAL_POLICY = '__probe__'  # the task planner aborts it at once: INVALID_GOAL
+
+
+def wait_action_answering(
+    action: Any, spin_until: Callable[..., bool], timeout_s: float = 30.0, attempt_s: float = 2.0
+) -> None:
+    """Wait for the action server and until it answers a probe goal (an unknown policy, aborted
+    at once with INVALID_GOAL) and its result, re-sent every ``attempt_s`` [s].
+
+    Like :func:`wait_answering` for services: ``wait_for_server`` returns before the server has
+    matched the client's readers, and a goal answer written then is lost (soak: "goal not
+    answered" in 1 of 10 runs). Waiting for the probe's result too means the server is idle
+    again when the real goal arrives (a second goal would be refused as busy).
+    """
+    from qtree_msgs.action import RetrieveTarget
+
+    assert action.wait_for_server(timeout_sec=timeout_s), 'action server not available'
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        sent = action.send_goal_async(RetrieveTarget.Goal(policy=PROBE_GOAL_POLICY))
+        if not spin_until(sent.done, attempt_s):
+            continue
+        handle = sent.result()
+        while handle.accepted and time.monotonic() < deadline:
+            if spin_until(handle.get_result_async().done, attempt_s):
+                return
+        if not handle.accepted:
+            return
+    raise AssertionError(f'the action server answered no probe goal in {timeout_s} s')
 
 
 class ClientGraph:

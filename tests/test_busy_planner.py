@@ -81,6 +81,7 @@ def test_loaded_planner_never_yields_a_wrong_infeasible_edge(launch: Any, ros_no
     ros_node.create_subscription(QTree, '/qtree', trees.append, latched)
     action = ActionClient(ros_node, RetrieveTarget, '/retrieve_target')
     ros_node.wait_matched(action)
+    ros_node.wait_action_answering(action)  # a goal sent earlier may be lost
     load = Load(ros_node)
     ros_node.spin_until(lambda: load.pump() or load.busy > 5, 60.0)
     assert load.busy > 5, 'the load did not fill the planner queue'

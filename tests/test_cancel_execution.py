@@ -53,6 +53,7 @@ def test_cancel_during_execution_stops_the_arm(launch: Any, ros_node: Any) -> No
     ros_node.create_subscription(Scene, '/scene', scenes.append, latched)
     client = ActionClient(ros_node, RetrieveTarget, '/retrieve_target')
     ros_node.wait_matched(client, joint_states)
+    ros_node.wait_action_answering(client)  # a goal sent earlier may be lost
     goal = RetrieveTarget.Goal(policy='H-EG-SET', seed=0, execute=True)
     sent = client.send_goal_async(goal)
     assert ros_node.spin_until(sent.done, 30.0) and sent.result().accepted

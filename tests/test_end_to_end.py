@@ -36,7 +36,7 @@ def test_learn_and_execute_on_s1(launch, ros_node) -> None:
     scenes: list[Any] = []
     ros_node.create_subscription(Scene, '/scene', scenes.append, latched)
     client = ActionClient(ros_node, RetrieveTarget, '/retrieve_target')
-    assert client.wait_for_server(timeout_sec=30.0)
+    ros_node.wait_action_answering(client)  # a goal sent earlier may be lost
     assert ros_node.spin_until(lambda: bool(scenes), 20.0), 'no /scene'
     before = {o.id: o.status for o in scenes[-1].objects}
 

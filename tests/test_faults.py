@@ -62,7 +62,7 @@ def test_motion_planner_killed_mid_training(launch: Any, ros_node: Any, tmp_path
         recorder.wait_for_log(f'recording {topic} ', 20.0)  # subscribed before the goal
 
     client = ActionClient(ros_node, RetrieveTarget, '/retrieve_target')
-    assert client.wait_for_server(timeout_sec=30.0)
+    ros_node.wait_action_answering(client)  # a goal sent earlier may be lost
     feedback: list[Any] = []
     goal = RetrieveTarget.Goal(
         policy='LRND', seed=4, max_episodes=5000, steady_episodes=1_000_000, feedback_every=1

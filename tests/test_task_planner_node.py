@@ -71,7 +71,7 @@ class GoalRunner:
             TrainingStats, '/training_stats', self.stats.append, 1000
         )
         ros_node.create_subscription(QTree, '/qtree', self.trees.append, latched)
-        assert self.client.wait_for_server(timeout_sec=30.0), '/retrieve_target not available'
+        ros_node.wait_action_answering(self.client)  # a goal sent earlier may be lost
         ros_node.wait_matched(stats)  # every episode's /training_stats is counted
 
     def send(self, **fields: Any) -> Any:

@@ -106,3 +106,43 @@ def test_exit_watchdog_keeps_the_code_and_never_delays_a_clean_exit():
     done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True)
     assert done.returncode == 3 and 'forced' not in done.stderr
     assert time.monotonic() - start < 15.0
+
+
+NODE_SCRIPT = """
+import sys
+import rclpy
+from qtree_node_support.lifecycle import run_node
+from rclpy.executors import MultiThreadedExecutor
+
+rclpy.install_signal_handlers = lambda *a, **k: None  # rclpy's handler missing the signal
+
+def make_node():
+    node = rclpy.create_node('idle_node')  # nothing ever wakes its executor up
+    print('ready', flush=True)
+    return node
+
+sys.exit(run_node(make_node, make_executor=lambda c: MultiThreadedExecutor(4, context=c)))
+"""
+
+
+@pytest.mark.parametrize('sig', ['SIGINT', 'SIGTERM'])
+def test_a_signal_stops_an_idle_node_even_if_rclpys_handler_misses_it(sig: str, tmp_path) -> None:
+    """Soak: a node still spinning 10 s after SIGINT (main thread in wait_for_ready_callbacks)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    env = dict(os.environ, ROS_DOMAIN_ID='231', ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    process = subprocess.Popen(
+        [sys.executable, '-c', NODE_SCRIPT], stdout=subprocess.PIPE, text=True, env=env
+    )
+    try:
+        assert process.stdout.readline().strip() == 'ready'
+        time.sleep(0.5)
+        process.send_signal(getattr(signal, sig))
+        assert process.wait(timeout=10.0) == 0
+    finally:
+        process.kill()
+        process.wait()
