@@ -114,6 +114,8 @@ def main() -> None:
             'tolerance_rad': config.orientation_tolerance_rad,
         },
         'profile': profile,
+        # scripts/planner_answers.py compare --out: main vs this code on the same questions
+        'speed': _speed_record(),
         'scenes': rows,
         'wall_s': round(time.perf_counter() - wall_start, 1),
     }
@@ -122,6 +124,12 @@ def main() -> None:
     markdown = report.render(summary) + report.notes(summary)
     (OUT / 'motion_planner.md').write_text(markdown)
     print(markdown)
+
+
+def _speed_record() -> dict | None:
+    """The committed before/after comparison of the speed work, if any."""
+    path = OUT / 'motion_planner_speed.json'
+    return json.loads(path.read_text()) if path.exists() else None
 
 
 if __name__ == '__main__':

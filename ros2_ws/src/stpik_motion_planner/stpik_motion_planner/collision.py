@@ -1,8 +1,10 @@
-"""python-fcl worlds: the scene objects and the arm's links, with broad-phase distance queries.
+"""python-fcl worlds: the scene objects and the arm's links, with distance queries.
 
-No ROS import. Every query goes through ``fcl.DynamicAABBTreeCollisionManager``; the Python
-callback only sees pairs whose bounding boxes are closer than the query threshold, so a query
-where nothing is near costs one broad-phase traversal in C++.
+No ROS import. A probe against the scene (:meth:`SceneWorld.clearance`) goes through
+``fcl.DynamicAABBTreeCollisionManager``. The arm's queries (:class:`RobotBodies`) bound every
+pair's distance from below in numpy first (bounding spheres, a box around each scene object) and
+call ``fcl.distance`` only on the pairs that bound cannot rule out, so they return exactly the
+pairs a query of every pair would, and a query where nothing is near makes no fcl call.
 """
 
 from __future__ import annotations
@@ -98,6 +100,16 @@ class SceneWorld:
         if self._keep:
             self.manager.registerObjects(self._keep)
         self.manager.setup()
+        # Per object (manager order): centre [m] (O, 3), yaw cos/sin (O,), half extents [m]
+        # (O, 3) of a box around it in its own frame, for the cheap lower bounds of
+        # RobotBodies.scene_proximities.
+        specs = list(self.objects.values())
+        self.ids = [obj.id for obj in specs]
+        self.centres = np.array([obj.position for obj in specs], dtype=float).reshape(-1, 3)
+        self.cos = np.array([math.cos(obj.yaw) for obj in specs])
+        self.sin = np.array([math.sin(obj.yaw) for obj in specs])
+        self.half = np.array([_half_extents(obj) for obj in specs]).reshape(-1, 3)
+        self.bodies = self._keep
 
     @property
     def names(self) -> dict[int, str]:
@@ -118,6 +130,13 @@ class SceneWorld:
         return [_probe_first(p) for p in data.found]
 
 
+def _half_extents(obj: ObjectSpec) -> tuple[float, float, float]:
+    """Half sizes [m] of a box in the object's frame containing it (cylinder: r, r, h/2)."""
+    if obj.shape == 'cylinder':
+        return (obj.radius, obj.radius, obj.height / 2)
+    return tuple(0.5 * float(v) for v in obj.size)
+
+
 def _probe_first(p: Proximity) -> Proximity:
     if p.name_b == 'probe':
         return Proximity(p.name_b, p.name_a, p.distance, p.point_b, p.point_a)
@@ -127,10 +146,9 @@ def _probe_first(p: Proximity) -> Proximity:
 class RobotBodies:
     """The arm's collision primitives (from the Pinocchio ``GeometryModel``) as fcl objects.
 
-    Self-hit queries run on one broad-phase manager of every body and keep exactly the pairs of
-    ``self_pairs`` (``Jaco2Model.self_collision_pairs``), plus the carried object against every
-    link but the hand that holds it (link 7, fingers). The managers are built once and updated
-    after each :meth:`place`.
+    Self-hit queries cover exactly the pairs of ``self_pairs``
+    (``Jaco2Model.self_collision_pairs``), plus the carried object against every link but the
+    hand that holds it (link 7, fingers); the pair lists are rebuilt on attach / detach.
     """
 
     def __init__(
@@ -167,41 +185,50 @@ class RobotBodies:
         self.names: dict[int, str] = {}
         self.bodies: list[fcl.CollisionObject] = []
         self._geometries: list[fcl.CollisionGeometry] = []
+        self._transforms: list[fcl.Transform] = []
         for name, g in zip(self.link_names, geometry_model.geometryObjects, strict=True):
             geometry = _fcl_geometry(g.geometry)
             self.names[id(geometry)] = name
             self._geometries.append(geometry)
+            self._transforms.append(fcl.Transform())
             self.bodies.append(fcl.CollisionObject(geometry, fcl.Transform()))
+        # Bounding sphere of each body about its centre (the geometry frame's origin) [m].
+        self._radii = np.array([_sphere_radius(g) for g in self._geometries])
+        self._centres = np.zeros((len(self.bodies) + 1, 3))  # last row: the carried object
         self.attached: fcl.CollisionObject | None = None
         self.attached_radius = 0.0  # bounding radius of the carried object [m]
         self._attached_offset = pin.SE3.Identity()
+        self._transforms.append(fcl.Transform())  # the carried object's
+        self._placed = np.zeros(len(self.bodies) + 1, dtype=bool)
+        self._oMg: list[pin.SE3] = []
+        self._world_obj = pin.SE3.Identity()
         self._build_managers()
 
-    def _group(self, keys: tuple[str, ...]) -> list[fcl.CollisionObject]:
-        out = [b for n, b in zip(self.link_names, self.bodies, strict=True) if _short(n) in keys]
-        if 'attached' in keys and self.attached is not None:
-            out.append(self.attached)
-        return out
-
     def _build_managers(self) -> None:
-        # One (body, later partners) manager pair per body: their cross pairs are exactly the
-        # allowed self-hit pairs, so no distance is computed for adjacent or rigid pairs.
+        # The self-hit pairs as index arrays into [*bodies, attached] (pair order: first body,
+        # then partner, ascending): no distance is computed for adjacent or rigid pairs, and a
+        # bounding-sphere test in numpy skips the far ones before any fcl call.
         names = [*self.link_names, 'attached']
-        objects = [*self.bodies, self.attached]
-        self._self_pairs = []
-        for i, a in enumerate(names):
-            if objects[i] is None:
-                continue
-            partners = [
-                objects[j]
-                for j in range(i + 1, len(names))
-                if objects[j] is not None and frozenset((a, names[j])) in self._allowed
-            ]
-            if partners:
-                self._self_pairs.append((_manager([objects[i]]), _manager(partners)))
-        keys = tuple(_short(n) for n in self.link_names if _short(n) not in _NOT_VS_SCENE)
-        self._scene_manager = _manager(self._group((*keys, 'attached')))
-        self._managers = [m for pair in self._self_pairs for m in pair] + [self._scene_manager]
+        present = [*([True] * len(self.bodies)), self.attached is not None]
+        pairs = [
+            (i, j)
+            for i in range(len(names))
+            for j in range(i + 1, len(names))
+            if present[i] and present[j] and frozenset((names[i], names[j])) in self._allowed
+        ]
+        self._pair_a = np.array([i for i, _ in pairs], dtype=int)
+        self._pair_b = np.array([j for _, j in pairs], dtype=int)
+        self._pair_names = [(names[i], names[j]) for i, j in pairs]
+        self._objects = [*self.bodies, self.attached]
+        self._all_radii = np.r_[self._radii, self.attached_radius]
+        # Bodies checked against the scene: every link but the base and link 1, and the carried
+        # object.
+        self._scene_index = np.array(
+            [i for i, n in enumerate(self.link_names) if _short(n) not in _NOT_VS_SCENE]
+            + ([len(self.bodies)] if self.attached is not None else []),
+            dtype=int,
+        )
+        self._scene_names = [names[i] for i in self._scene_index]
 
     def attach(self, obj: ObjectSpec, transform_obj_to_ee: pin.SE3, settle_m: float = 0.0) -> None:
         """Carry ``obj`` rigidly at ``transform_obj_to_ee`` (its pose in the EE frame).
@@ -233,50 +260,99 @@ class RobotBodies:
             self._build_managers()
 
     def place(self, oMg: list[pin.SE3], world_ee: pin.SE3) -> None:
-        """Move the bodies to the geometry placements ``oMg`` and the EE pose ``world_ee``."""
-        for body, placement in zip(self.bodies, oMg, strict=True):
-            body.setTransform(fcl.Transform(placement.rotation, placement.translation))
+        """Move the bodies to the geometry placements ``oMg`` and the EE pose ``world_ee``.
+
+        Only the centres are stored here; a body's fcl transform is set when a query first
+        needs it (most bodies are far from everything and never reach fcl).
+        """
+        self._oMg = oMg
+        centres = self._centres
+        for index, placement in enumerate(oMg):
+            centres[index] = placement.translation
+        self._placed[:] = False
         if self.attached is not None:
-            world_obj = world_ee * self._attached_offset
-            self.attached.setTransform(fcl.Transform(world_obj.rotation, world_obj.translation))
-        for manager in self._managers:
-            manager.update()
+            self._world_obj = world_ee * self._attached_offset
+            centres[-1] = self._world_obj.translation
+
+    @property
+    def centres(self) -> np.ndarray:
+        """Centre of every body [m] (G + 1, 3) at the last :meth:`place` (last row: the carried
+        object, valid while attached)."""
+        return self._centres
+
+    def _body(self, index: int) -> fcl.CollisionObject:
+        """The fcl object of body ``index`` (the carried object: ``len(bodies)``), placed."""
+        if not self._placed[index]:
+            placement = self._world_obj if index == len(self.bodies) else self._oMg[index]
+            tf = self._transforms[index]
+            tf.setRotation(placement.rotation)
+            tf.setTranslation(placement.translation)
+            self._objects[index].setTransform(tf)
+            self._placed[index] = True
+        return self._objects[index]
 
     def self_proximities(self, threshold: float) -> list[Proximity]:
-        """Pairs of the self-hit list closer than ``threshold`` [m] (one query per body)."""
+        """Pairs of the self-hit list closer than ``threshold`` [m].
+
+        A pair whose bounding spheres are ``threshold`` apart or more cannot be closer, so only
+        the others reach ``fcl.distance`` (the result is the same set as a query of every pair).
+        """
+        a, b = self._pair_a, self._pair_b
+        if a.size == 0:
+            return []
+        gap = np.linalg.norm(self._centres[a] - self._centres[b], axis=1)
+        gap -= self._all_radii[a] + self._all_radii[b]
         found: list[Proximity] = []
-        for manager_a, manager_b in self._self_pairs:
-            data = _Collector(self.names, threshold)
-            manager_a.distance(manager_b, data, _collect)
-            found += data.found
+        for k in np.flatnonzero(gap < threshold):
+            result = fcl.DistanceResult()
+            body_a, body_b = self._body(int(a[k])), self._body(int(b[k]))
+            distance = fcl.distance(body_a, body_b, _REQUEST, result)
+            if distance < threshold:
+                name_a, name_b = self._pair_names[k]
+                pa, pb = result.nearest_points
+                found.append(Proximity(name_a, name_b, distance, pa, pb))
         return found
 
     def scene_proximities(self, scene: SceneWorld, threshold: float) -> list[Proximity]:
-        """(body, scene object) pairs closer than ``threshold`` [m]; the base is skipped."""
+        """(body, scene object) pairs closer than ``threshold`` [m]; the base is skipped.
+
+        Lower bound per pair (numpy, every pair at once): the distance from the body's centre
+        to a box around the object in the object's frame, minus the body's bounding radius.
+        Only pairs whose bound is below ``threshold`` reach ``fcl.distance``, so the result
+        is the same set as a query of every pair.
+        """
         if not scene.objects:
             return []
-        data = _Collector({**self.names, **scene.names}, threshold)
-        self._scene_manager.distance(scene.manager, data, _collect)
-        return [_robot_first(p, scene) for p in data.found]
-
-
-def _manager(bodies: list[fcl.CollisionObject]) -> fcl.DynamicAABBTreeCollisionManager:
-    manager = fcl.DynamicAABBTreeCollisionManager()
-    if bodies:
-        manager.registerObjects(bodies)
-    manager.setup()
-    return manager
-
-
-def _robot_first(p: Proximity, scene: SceneWorld) -> Proximity:
-    if p.name_a in scene.objects and p.name_b not in scene.objects:
-        return Proximity(p.name_b, p.name_a, p.distance, p.point_b, p.point_a)
-    return p
+        index = self._scene_index
+        delta = self._centres[index][:, None, :] - scene.centres[None]  # (B, O, 3)
+        x = delta[..., 0] * scene.cos + delta[..., 1] * scene.sin
+        y = delta[..., 1] * scene.cos - delta[..., 0] * scene.sin
+        local = np.stack([x, y, delta[..., 2]], axis=-1)
+        outside = np.maximum(np.abs(local) - scene.half[None], 0.0)
+        bound = np.linalg.norm(outside, axis=-1) - self._all_radii[index][:, None]
+        found: list[Proximity] = []
+        for body, obj in zip(*np.nonzero(bound < threshold), strict=True):
+            result = fcl.DistanceResult()
+            robot = self._body(int(index[body]))
+            distance = fcl.distance(robot, scene.bodies[obj], _REQUEST, result)
+            if distance < threshold:
+                pa, pb = result.nearest_points
+                found.append(Proximity(self._scene_names[body], scene.ids[obj], distance, pa, pb))
+        return found
 
 
 def _short(link: str) -> str:
     short = link.removeprefix('j2s7s300_')
     return 'finger' if short.startswith('link_finger') else short
+
+
+def _sphere_radius(geometry: fcl.CollisionGeometry) -> float:
+    """Radius [m] of the sphere about an fcl primitive's centre that contains it."""
+    if isinstance(geometry, fcl.Cylinder):
+        return math.hypot(geometry.radius, geometry.lz / 2)
+    if isinstance(geometry, fcl.Box):
+        return 0.5 * float(np.linalg.norm(geometry.side))
+    return float(geometry.radius)
 
 
 def _fcl_geometry(geometry: object) -> fcl.CollisionGeometry:

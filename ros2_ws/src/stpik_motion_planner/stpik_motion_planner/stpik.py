@@ -70,6 +70,25 @@ def damped_pinv(A: np.ndarray, damping: float, threshold: float) -> np.ndarray:
 RANK_TOLERANCE = 1e-6  # singular values below this are rank loss in the null-space projector [-]
 
 
+def pinv_pair(
+    A: np.ndarray, damping: float, threshold: float, tolerance: float = RANK_TOLERANCE
+) -> tuple[np.ndarray, np.ndarray]:
+    """(:func:`damped_pinv`, :func:`truncated_pinv`) of A (m, n), both (n, m), from ONE SVD.
+
+    Bit-identical to calling the two functions (same decomposition, same arithmetic).
+    """
+    if A.size == 0:
+        zero = np.zeros((A.shape[1], A.shape[0]))
+        return zero, zero.copy()
+    U, S, Vt = np.linalg.svd(A, full_matrices=False)
+    lam2 = np.where(threshold > S, damping**2 * (1.0 - (S / threshold) ** 2), 0.0)
+    denom = S**2 + lam2
+    s_damped = np.divide(S, denom, out=np.zeros_like(S), where=denom > 1e-12)
+    s_truncated = np.divide(1.0, S, out=np.zeros_like(S), where=tolerance <= S)
+    V = Vt.T
+    return (V * s_damped) @ U.T, (V * s_truncated) @ U.T
+
+
 def truncated_pinv(A: np.ndarray, tolerance: float = RANK_TOLERANCE) -> np.ndarray:
     """Undamped pseudo-inverse of A (m, n) → (n, m), singular values < ``tolerance`` dropped."""
     if A.size == 0:
@@ -98,12 +117,14 @@ def solve_hierarchy(levels: Sequence[TaskRows], n: int, damping: float, threshol
     """  # noqa: E501
     dq = np.zeros(n)
     N = np.eye(n)
-    for rows in levels:
-        if rows.dim == 0:
-            continue
+    used = [rows for rows in levels if rows.dim]
+    for index, rows in enumerate(used):
         JN = rows.jacobian @ N
-        dq = dq + damped_pinv(JN, damping, threshold) @ (rows.error - rows.jacobian @ dq)
-        N = N - truncated_pinv(JN) @ JN
+        if index == len(used) - 1:  # the last level's projector is never used
+            return dq + damped_pinv(JN, damping, threshold) @ (rows.error - rows.jacobian @ dq)
+        damped, truncated = pinv_pair(JN, damping, threshold)
+        dq = dq + damped @ (rows.error - rows.jacobian @ dq)
+        N = N - truncated @ JN
     return dq
 
 
@@ -132,6 +153,7 @@ class Stpik:
         self._body_radius = np.array(
             [_bounding_radius(g.geometry) for g in self.geometry_model.geometryObjects]
         )
+        self._moved: dict[int, np.ndarray] = {}  # body_reach's (7, G) masks by body count
         self._body_index = {name: i for i, name in enumerate(robot.collision_links)}
         self._body_index['attached'] = len(robot.collision_links)
         self.ee_frame = self.model.getFrameId(EE_FRAME)
@@ -369,19 +391,22 @@ class Stpik:
 
         To first order a step dq moves no point of body g farther than Σ_j |dq_j| R_{j,g}.
         """
-        origins = np.array([k.data.oMi[j].translation for j in range(1, 8)])  # (7, 3)
-        axes = np.array([k.data.oMi[j].rotation[:, 2] for j in range(1, 8)])  # RZ joints (7, 3)
-        centres = np.array([m.translation for m in self.geometry_data.oMg])  # (G, 3)
+        frames = np.array([m.homogeneous for m in k.data.oMi[1:8]])  # joints 1..7 (7, 4, 4)
+        origins = frames[:, :3, 3]  # (7, 3)
+        axes = frames[:, :3, 2]  # RZ joints (7, 3)
         joints, radii = self._body_joint, self._body_radius
+        centres = self.bodies.centres[: len(joints)]  # (G, 3), placed by kinematics
         if self.bodies.attached is not None:
-            centres = np.vstack([centres, self.bodies.attached.getTranslation()])
+            centres = self.bodies.centres
             joints = np.r_[joints, 7]
             radii = np.r_[radii, self.bodies.attached_radius]
         offset = centres[None] - origins[:, None]  # (7, G, 3)
         along = np.einsum('jgk,jk->jg', offset, axes)
         to_axis = np.linalg.norm(offset - along[..., None] * axes[:, None], axis=2)
         distance = to_axis + radii[None]
-        moved = joints[None] >= np.arange(1, 8)[:, None]
+        moved = self._moved.get(len(joints))
+        if moved is None:  # depends on the bodies only (with / without the carried object)
+            moved = self._moved[len(joints)] = joints[None] >= np.arange(1, 8)[:, None]
         return np.where(moved, distance, 0.0), joints
 
     def step_scale(self, k: Kinematics, dq: np.ndarray) -> float:
@@ -446,13 +471,25 @@ class Stpik:
         for q in out:
             if time.perf_counter() > deadline:
                 raise PlanningTimeout.past(deadline, c.time_limit_s)
-            k = self.kinematics(q, scene, lookahead=0.0)
-            for p in k.self_pairs:
-                if p.distance < c.self_activation_m:
-                    raise SelfCollision(p.name_a, p.name_b, p.distance)
-            for p in k.scene_pairs:
-                if p.distance < c.obstacle_activation_m:
-                    raise SceneCollision(p.name_a, p.name_b, p.distance)
+            # Collision checks only: placements without Jacobians (bit-identical to those of
+            # kinematics), self pairs first, the scene only when no self pair is too close.
+            pin.forwardKinematics(self.model, self.data, q)
+            pin.updateFramePlacements(self.model, self.data)
+            pin.updateGeometryPlacements(
+                self.model, self.data, self.geometry_model, self.geometry_data
+            )
+            start = time.perf_counter()
+            self.bodies.place(self.geometry_data.oMg, self.data.oMf[self.ee_frame])
+            found = self.bodies.self_proximities(c.self_activation_m)
+            if not found:
+                hits = self.bodies.scene_proximities(scene, c.obstacle_activation_m)
+            self.collision_time += time.perf_counter() - start
+            if found:
+                p = found[0]
+                raise SelfCollision(p.name_a, p.name_b, p.distance)
+            if hits:
+                p = hits[0]
+                raise SceneCollision(p.name_a, p.name_b, p.distance)
         return out
 
     def _check(

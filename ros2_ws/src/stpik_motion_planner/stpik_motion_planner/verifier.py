@@ -24,10 +24,13 @@ Densification: between two trajectory samples the joints move on a straight line
 of a body carried by joint i moves at most m_g = Σ_{j ≤ i} |Δq_j| · ‖p − o_j‖, and ‖p − o_j‖ is
 bounded by a configuration-independent reach D_{j,g} (the joint-origin chain lengths from joint j
 to the body's joint plus the body's own bounding radius). Every sample is checked with exact
-distances of every pair. On a segment, a pair (a, b) whose distance at either end exceeds
-m_a + m_b cannot touch anywhere on it; the other ("close") pairs are checked at n − 1 interior
-configurations, n = ⌈max m_g over their bodies / resolution⌉, so no point of a body that could
-touch anything moves more than ``resolution_m`` (1 cm) between two checks.
+distances of every pair. On a segment, pair k's distance changes by at most m_k per unit of the
+segment parameter t, so a pair at distance d is provably free on an interval of t of length
+d / m_k around any checked configuration (conservative advancement). A pair whose intervals from
+the two ends meet is free on the whole segment; the others are marched from the start, checking
+their exact distances at the smallest proven-free advance, and never at a finer step than
+``resolution_m`` (1 cm) of their motion: where nothing is proven free, no point of a body that
+could touch anything moves more than 1 cm between two checks.
 """
 
 from __future__ import annotations
@@ -210,7 +213,8 @@ class TrajectoryVerifier:
         return out
 
     def _build(self, obstacles: list[ObjectSpec], carried: Carried | None, q_grasp, q_release):
-        """Private GeometryModel, pairs per phase (before / during / after the carry), reaches."""
+        """Private GeometryModel, body names, pair reaches and kinds, and per phase (before /
+        during / after the carry) the mask of the pairs it checks."""
         gm = pin.GeometryModel()
         robot_ids = []
         for g in self.robot.geometry_model.geometryObjects:
@@ -266,29 +270,24 @@ class TrajectoryVerifier:
                     pairs['carry'].append((held, rid, 'self_collision'))
             for sid in scene_ids:
                 pairs['carry'].append((held, sid, 'scene_collision'))
-        kinds = {}
-        for phase in pairs.values():
-            for a, b, kind in phase:
-                if (a, b) not in kinds:
-                    kinds[(a, b)] = kind
-                    gm.addCollisionPair(pin.CollisionPair(a, b))
-        index = {}
-        for k, p in enumerate(gm.collisionPairs):
-            index[(p.first, p.second)] = index[(p.second, p.first)] = k
-        datas = {}
+        # One symmetric activation map per phase; the model holds their union (one call instead
+        # of one per pair), each phase checks the pairs of its mask.
+        count = len(gm.geometryObjects)
+        kinds: dict[tuple[int, int], str] = {}
+        maps = {}
         for phase, members in pairs.items():
-            gd = pin.GeometryData(gm)
-            gd.deactivateAllCollisionPairs()
-            for a, b, _ in members:
-                gd.activateCollisionPair(index[(a, b)])
-            for request in gd.collisionRequests:
-                request.security_margin = self.clearance_m
-            datas[phase] = gd
-        pair_kinds = [
-            kinds.get((p.first, p.second), kinds.get((p.second, p.first)))
-            for p in gm.collisionPairs
-        ]
-        return gm, datas, names, self._pair_reach(gm, np.array(reaches).T), pair_kinds
+            active = np.zeros((count, count), dtype=bool)
+            for a, b, kind in members:
+                kinds.setdefault((min(a, b), max(a, b)), kind)
+                active[a, b] = active[b, a] = True
+            maps[phase] = active
+        gm.setCollisionPairs(np.logical_or.reduce(list(maps.values())), True)
+        first = np.array([p.first for p in gm.collisionPairs], dtype=int)
+        second = np.array([p.second for p in gm.collisionPairs], dtype=int)
+        masks = {phase: active[first, second] for phase, active in maps.items()}
+        pair_kinds = [kinds[(min(a, b), max(a, b))] for a, b in zip(first, second, strict=True)]
+        reach = self._pair_reach(gm, np.array(reaches).T)
+        return gm, names, reach, pair_kinds, masks
 
     @staticmethod
     def _pair_reach(gm: pin.GeometryModel, reaches: np.ndarray) -> np.ndarray:
@@ -356,31 +355,43 @@ class TrajectoryVerifier:
             )
         grasp = carried.grasp_index if carried else len(q)
         release = carried.release_index if carried else len(q)
-        gm, datas, names, reaches, kinds = self._build(
+        gm, names, reaches, kinds, masks = self._build(
             list(obstacles), carried, q[min(grasp, len(q) - 1)], q[min(release, len(q) - 1)]
         )
         report = VerificationReport(checked=len(q))
         motion = self.motion_bounds(q, reaches)  # (N-1, P): relative motion of each pair [m]
         worst: dict[tuple[str, str, str], Violation] = {}
-        scratch = {phase: gd.copy() for phase, gd in datas.items()}
 
         def phase_at(t: float) -> str:
             return 'before' if t < grasp else ('carry' if t <= release else 'after')
 
-        every = gm.collisionPairs
-        full = pin.GeometryData(gm)  # every pair active: one distance query per sample
-        masks = {
-            phase: np.array([bool(a) for a in gd.activeCollisionPairs])
-            for phase, gd in datas.items()
-        }
+        full = pin.GeometryData(gm)
+        # Bounding sphere of every geometry about its frame's origin [m], pair members.
+        radius = np.array([_bounding_radius(g.geometry) for g in gm.geometryObjects])
+        first = np.array([p.first for p in gm.collisionPairs], dtype=int)
+        second = np.array([p.second for p in gm.collisionPairs], dtype=int)
+        # Per sample and pair: the largest motion bound of the two segments around it [m].
+        padded = np.vstack(
+            [np.zeros((1, motion.shape[1])), motion, np.zeros((1, motion.shape[1]))]
+        )
+        around = np.maximum(padded[:-1], padded[1:]) + self.clearance_m  # (N, P)
         cache: dict[int, np.ndarray] = {}
 
         def distance(i: int, phase: str) -> np.ndarray:
+            """Per pair at sample i: the exact distance where it can matter, else a lower bound.
+
+            The bound (centre distance minus both bounding radii) is used where it exceeds
+            the clearance plus the pair's motion on both neighbouring segments: such a pair is
+            free at the sample and, from it, on both segments, which is all the checks use.
+            """
             if i not in cache:
-                pin.computeDistances(self.model, self.data, gm, full, q[i])
-                cache[i] = np.fromiter(
-                    (r.min_distance for r in full.distanceResults), float, len(every)
-                )
+                pin.updateGeometryPlacements(self.model, self.data, gm, full, q[i])
+                centres = np.array([m.translation for m in full.oMg])
+                d = np.linalg.norm(centres[first] - centres[second], axis=1)
+                d -= radius[first] + radius[second]
+                for k in np.flatnonzero(d < around[i]):
+                    d[k] = pin.computeDistance(gm, full, int(k)).min_distance
+                cache[i] = d
             return np.where(masks[phase], cache[i], np.inf)
 
         for i in range(len(q)):
@@ -390,29 +401,10 @@ class TrajectoryVerifier:
                 self._record(worst, gm, names, kinds, int(k), float(i), float(d[k]))
         for i in range(len(q) - 1):
             phase = 'before' if i < grasp else ('carry' if i < release else 'after')
-            bound = motion[i] + self.clearance_m
-            close = np.flatnonzero(
-                (distance(i, phase) <= bound) & (distance(i + 1, phase) <= bound)
-            )
-            if close.size == 0:
-                continue
-            largest = float(np.max(motion[i][close]))
-            n = max(1, math.ceil(largest / self.resolution_m))
-            report.max_gap_m = max(report.max_gap_m, largest / n)
-            gd = scratch[phase]
-            gd.deactivateAllCollisionPairs()
-            for k in close:
-                gd.activateCollisionPair(int(k))
-            for step in range(1, n):
-                t = i + step / n
-                qt = q[i] + (q[i + 1] - q[i]) * (step / n)
-                report.checked += 1  # joint limits: extremes of a joint line are its ends
-                if not pin.computeCollisions(self.model, self.data, gm, gd, qt, False):
-                    continue
-                for k in close:
-                    if gd.collisionResults[int(k)].isCollision():
-                        dist = pin.computeDistance(gm, gd, int(k)).min_distance
-                        self._record(worst, gm, names, kinds, int(k), t, float(dist))
+            self._segment(
+                q[i], q[i + 1], float(i), motion[i], distance(i, phase), distance(i + 1, phase),
+                full, (gm, names, kinds, worst), report,
+            )  # fmt: skip
         for v in worst.values():
             {
                 'joint_limit': report.limit_violations,
@@ -420,6 +412,55 @@ class TrajectoryVerifier:
                 'scene_collision': report.scene_collisions,
             }[v.kind].append(v)
         return report
+
+    def _segment(
+        self,
+        q_a: np.ndarray,
+        q_b: np.ndarray,
+        start: float,
+        motion: np.ndarray,
+        d_a: np.ndarray,
+        d_b: np.ndarray,
+        gd: pin.GeometryData,
+        record: tuple,
+        report: VerificationReport,
+    ) -> None:
+        """Conservative advancement along the joint line ``q_a`` → ``q_b`` (one segment).
+
+        Pair k's distance changes by at most m_k·|Δt| (``motion``: its bound over the whole
+        segment), so with slack s = d − clearance it is free on [t, t + s/m_k] from any checked
+        t, and on [1 − s_b/m_k, 1] from the end. Pairs whose intervals meet are done; the
+        others are checked at t + Δt, Δt the smallest proven-free advance, but never less
+        than ``resolution_m`` of their largest motion (the uniform densification's guarantee
+        where nothing is proven).
+        """
+        gm, names, kinds, worst = record
+        c = self.clearance_m
+        slack_b = d_b - c
+        slack = d_a - c
+        close = np.flatnonzero((motion > 1e-12) & (slack + slack_b <= motion))
+        t = 0.0
+        while close.size:
+            m = motion[close]
+            done = t * m + np.maximum(slack[close], 0.0) + slack_b[close] >= m
+            close, m = close[~done], m[~done]
+            if close.size == 0:
+                return
+            free = float(np.min(np.maximum(slack[close], 0.0) / m))
+            largest = float(np.max(m))
+            step = max(free, self.resolution_m / largest)
+            if step == self.resolution_m / largest:
+                report.max_gap_m = max(report.max_gap_m, step * largest)
+            t += step
+            if t >= 1.0:
+                return
+            pin.updateGeometryPlacements(self.model, self.data, gm, gd, q_a + (q_b - q_a) * t)
+            report.checked += 1  # joint limits: extremes of a joint line are its ends
+            for k in close:
+                dist = float(pin.computeDistance(gm, gd, int(k)).min_distance)
+                slack[k] = dist - c
+                if dist < c:
+                    self._record(worst, gm, names, kinds, int(k), start + t, dist)
 
     def _record(self, worst, gm, names, kinds, k: int, t: float, distance: float) -> None:
         pair = gm.collisionPairs[k]

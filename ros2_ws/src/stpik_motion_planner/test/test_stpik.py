@@ -9,7 +9,14 @@ from hypothesis import strategies as st
 from stpik_motion_planner.cartesian_path import grasp_rotation
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import PlannerConfig
-from stpik_motion_planner.stpik import READY, Stpik, damped_pinv, solve_hierarchy
+from stpik_motion_planner.stpik import (
+    READY,
+    Stpik,
+    damped_pinv,
+    pinv_pair,
+    solve_hierarchy,
+    truncated_pinv,
+)
 from stpik_motion_planner.tasks import TaskRows
 
 
@@ -31,6 +38,20 @@ def test_hierarchy_keeps_the_first_task_exact(values):
     N = np.eye(7) - np.linalg.pinv(J1) @ J1
     best = np.linalg.pinv(J1) @ x1 + np.linalg.pinv(J2 @ N) @ (x2 - J2 @ np.linalg.pinv(J1) @ x1)
     assert np.allclose(dq, best, atol=1e-6)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.floats(0.0, 1e-2))
+def test_one_svd_gives_both_pseudo_inverses_bit_identically(seed, scale):
+    """pinv_pair (one SVD) equals damped_pinv and truncated_pinv exactly, also where damping
+    acts (singular value ``scale`` below the threshold)."""
+    rng = np.random.default_rng(seed)
+    U, _ = np.linalg.qr(rng.normal(size=(6, 6)))
+    V, _ = np.linalg.qr(rng.normal(size=(7, 7)))
+    J = U @ np.diag([1.0, 0.8, 0.5, 0.3, 0.1, scale]) @ V[:6]
+    damped, truncated = pinv_pair(J, 0.02, 0.02)
+    assert np.array_equal(damped, damped_pinv(J, 0.02, 0.02))
+    assert np.array_equal(truncated, truncated_pinv(J))
 
 
 def test_damped_pinv_is_exact_away_from_singularities_and_bounded_near_them():

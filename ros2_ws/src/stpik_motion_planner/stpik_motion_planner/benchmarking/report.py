@@ -115,7 +115,51 @@ def render(s: dict) -> str:
             + ', '.join(f'`{k}` {v}' for k, v in prof['top_functions_s'].items())
             + '.',
         ]
+    lines += speed_section(s.get('speed'))
     return '\n'.join(lines) + '\n'
+
+
+def speed_section(speed: dict | None) -> list[str]:
+    """Markdown lines of the #13 speed work: the same questions on ``main`` and on the faster
+    code, CPU time (``scripts/planner_answers.py compare --out``), answers compared."""
+    if not speed:
+        return []
+    before, after = speed['before'], speed['after']
+    lines = [
+        '',
+        '## Speed work: before / after on the same questions (CPU time)',
+        '',
+        f'Every question of the exact searches on {", ".join(speed["scenarios"])} '
+        f'({speed["questions"]} uncached checks), asked of the code before and after the speed '
+        f'work ({speed["runs"]["before"]} / {speed["runs"]["after"]} runs, one process at a '
+        'time, per question the smallest CPU time of its runs; time limit raised so that no '
+        f'answer is a TIMEOUT): **{speed["answers_changed"]} answers changed** '
+        '(feasible, reason).',
+        '',
+        '| checks | n | before median ms | before p95 ms | after median ms | after p95 ms '
+        '| speed-up (median) |',
+        '|---|---|---|---|---|---|---|',
+    ]
+    for label in ('feasible', 'reached_stpik'):
+        b, a = before[label], after[label]
+        ratio = b['median_ms'] / a['median_ms'] if a.get('median_ms') else None
+        lines.append(
+            f'| {label} | {a["n"]} | {b["median_ms"]} | {b["p95_ms"]} | {a["median_ms"]} '
+            f'| {a["p95_ms"]} | {f"{ratio:.2f}x" if ratio else "-"} |'
+        )
+    pb, pa = before.get('profile_cpu_s', {}), after.get('profile_cpu_s', {})
+    if pb and pa:
+        lines += [
+            '',
+            'Profile before / after (cProfile with a CPU clock over the same questions, '
+            'cumulative CPU s per phase):',
+            '',
+            '| phase | before CPU s | after CPU s |',
+            '|---|---|---|',
+        ]
+        for phase in sorted(pb, key=lambda k: -pb[k]):
+            lines.append(f'| {phase} | {pb[phase]} | {pa.get(phase, "-")} |')
+    return lines
 
 
 def notes(s: dict) -> str:
@@ -153,7 +197,13 @@ def notes(s: dict) -> str:
         'now includes the independent verification of its trajectory (stage "verify") and '
         'STPIK steps bounded in Cartesian terms (more, shorter steps); the #14 blocker search '
         "on infeasible answers is switched off here (not part of the check); the machine's load "
-        f'during the run: {s["load_average"]} (2 cores shared), so the timings are upper bounds.',
+        f'during the run: {s["load_average"]} (2 cores shared), so the timings are upper bounds'
+        + (
+            ' (wall clock; the same questions before / after the speed work in CPU time: '
+            '"Speed work" above).'
+            if s.get('speed')
+            else '.'
+        ),
         f'- **Levels.** s1/s2/s3: {levels.get("s1")}/{levels.get("s2")}/{levels.get("s3")} '
         '(paper 4/5/6).',
     ]

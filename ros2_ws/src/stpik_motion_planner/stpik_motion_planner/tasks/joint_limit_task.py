@@ -24,6 +24,7 @@ class JointLimitTask(SetBasedTask):
         self.upper = np.asarray(upper, dtype=float)
         self.margin = margin
         self._eye = np.eye(len(self.lower))
+        self._low, self._high = self.lower + margin, self.upper - margin  # thresholds [rad]
         self._labels = tuple(f'joint_{i + 1}' for i in range(len(self.lower)))
 
     def evaluate(self, k: Kinematics):
@@ -31,7 +32,7 @@ class JointLimitTask(SetBasedTask):
         return (
             np.asarray(k.q, dtype=float),
             self._eye,
-            self.lower + self.margin,
-            self.upper - self.margin,
+            self._low,
+            self._high,
             self._labels,
         )

@@ -19,6 +19,9 @@ class ObstacleTask(SetBasedTask):
 
     def evaluate(self, k: Kinematics):
         """Rows of the (body, object) pairs found closer than the activation distance."""
-        sigma, jacobian, labels = distance_rows(k, k.scene_pairs, second_is_robot=False)
+        # Only pairs below the activation distance can leave the valid set: rows of the others
+        # (found up to the step bound's lookahead) would be discarded by :meth:`compute`.
+        close = [p for p in k.scene_pairs if p.distance < self.activation]
+        sigma, jacobian, labels = distance_rows(k, close, second_is_robot=False)
         lower = np.full(len(sigma), self.activation)
         return sigma, jacobian, lower, np.full(len(sigma), np.inf), labels

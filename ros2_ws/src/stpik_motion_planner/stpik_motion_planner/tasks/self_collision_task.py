@@ -40,7 +40,10 @@ class SelfCollisionTask(SetBasedTask):
         self.activation = activation
 
     def evaluate(self, k: Kinematics):
-        """Rows of the pairs found closer than the activation distance."""
-        sigma, jacobian, labels = distance_rows(k, k.self_pairs, second_is_robot=True)
+        """Rows of the pairs closer than the activation distance."""
+        # Only pairs below the activation distance can leave the valid set: rows of the others
+        # (found up to the step bound's lookahead) would be discarded by :meth:`compute`.
+        close = [p for p in k.self_pairs if p.distance < self.activation]
+        sigma, jacobian, labels = distance_rows(k, close, second_is_robot=True)
         lower = np.full(len(sigma), self.activation)
         return sigma, jacobian, lower, np.full(len(sigma), np.inf), labels

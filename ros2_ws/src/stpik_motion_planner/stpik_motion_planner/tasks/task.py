@@ -39,6 +39,7 @@ class Kinematics:
     body_joint: dict[str, int]
     self_pairs: list[Proximity] = field(default_factory=list)
     scene_pairs: list[Proximity] = field(default_factory=list)
+    _joint_jacobians: dict[int, np.ndarray] = field(default_factory=dict, repr=False)
 
     def point_jacobian(self, body: str, point: np.ndarray) -> np.ndarray:
         """Jacobian of the world velocity of a point fixed to ``body``, shape (3, 7).
@@ -48,7 +49,10 @@ class Kinematics:
             point: the point in the world frame [m], shape (3,).
         """
         joint = self.body_joint[body]
-        J = pin.getJointJacobian(self.model, self.data, joint, pin.LOCAL_WORLD_ALIGNED)
+        J = self._joint_jacobians.get(joint)
+        if J is None:  # once per joint and configuration
+            J = pin.getJointJacobian(self.model, self.data, joint, pin.LOCAL_WORLD_ALIGNED)
+            self._joint_jacobians[joint] = J
         r = point - self.data.oMi[joint].translation
         # v_p = v_o + ω × r = J_v q̇ − [r]× J_ω q̇
         return J[:3] - pin.skew(r) @ J[3:]
@@ -104,6 +108,8 @@ class SetBasedTask(Task):
         sigma, jacobian, lower, upper, labels = self.evaluate(k)
         below, above = sigma < lower, sigma > upper
         rows = np.flatnonzero(below | above)
+        if rows.size == 0:  # nothing outside its valid set (the usual case)
+            return TaskRows(jacobian[:0], np.zeros(0), ())
         desired = np.where(below, lower, upper)[rows]
         return TaskRows(
             jacobian[rows],
