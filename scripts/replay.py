@@ -173,13 +173,14 @@ def convert(run: McapRun, *, rrd: Path | None, spawn: bool, urdf: Path | None, q
     return count
 
 
-def screenshot(rrd: Path, png: Path, *, settle_s: float = 3.0, port: int = 0) -> None:
+def screenshot(rrd: Path, png: Path, *, settle_s: float = 15.0, port: int = 0) -> None:
     """Render ``rrd`` (default layout, time cursor at the end) to ``png`` in a headless viewer.
 
     Args:
         rrd: the recording.
         png: output image (1920×1080).
-        settle_s: time given to the viewer to load and lay out the graph [s].
+        settle_s: time given to the viewer to load and lay out the graph [s] (3 s left the
+            Q-tree panel empty on a loaded machine).
         port: gRPC port of the headless viewer (0: a free one).
 
     Raises:
