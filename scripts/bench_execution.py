@@ -172,7 +172,9 @@ def markdown(report: dict) -> str:
         f'integrator. {report["machine"]}; wall {report["wall_s"]} s.',
         '',
         'Errors are of the TRUE EE position vs the reference of the same instant; placement is '
-        'the released object vs where the plan releases it (worst relocation); clearance is the '
+        'the object centre at the release vs where the plan releases it (worst relocation; the '
+        'sim then stands an object released within 50 mm of its drop slot on the slot: a '
+        'modelling step, not counted); clearance is the '
         'smallest robot / carried-object distance to the scene (planner margin '
         f'{report["obstacle_margin_mm"]:g} mm); step times are per controller step (wall, and '
         'thread CPU time, which excludes preemption by the other processes of the shared '

@@ -54,7 +54,9 @@ class Execution:
         completed: True when every segment finished (the object released, the arm back).
         failure: why not ('' when completed).
         errors_m: EE position error per tick vs the reference of that tick [m].
-        placement_error_m: released object position vs the planned one [m] (NaN if never).
+        placement_error_m: object centre at the release vs the planned one [m] (NaN if never
+            released): the arm's placement, not the sim's standing of the object on its drop
+            slot afterwards (up to ``qtree_scene.placement.SNAP_RADIUS_M``, a modelling step).
         duration_s: simulated time to complete (or to the stop) [s].
         step_s: wall time of each controller step [s] (empty in open loop).
         step_cpu_s: thread CPU time of each controller step [s] (empty in open loop).
@@ -110,6 +112,7 @@ class Executor:
         self.max_ticks = int((result.times[-1] + SETTLE_EXTRA_S) * self.config.control_rate_hz)
         self.ticks = 0
         self._clearance = 0.0  # last measured clearance [m]
+        self._released_at: np.ndarray | None = None  # object centre when released [m] (3,)
 
     def planned_placement(self) -> np.ndarray:
         """Where the plan releases the object: x_d(release) · x_d(grasp)⁻¹ · object [m] (3,)."""
@@ -131,9 +134,8 @@ class Executor:
         except ExecutionStopped as err:
             self.out.failure = str(err)
         self.out.duration_s = self.sim.time
-        state = self.world.state(self.object_id)
-        if state.status == 'relocated':
-            self.out.placement_error_m = float(np.linalg.norm(state.pose.translation - planned))
+        if self._released_at is not None:
+            self.out.placement_error_m = float(np.linalg.norm(self._released_at - planned))
         return self.out
 
     def _tick(self, ee_ref: pin.SE3) -> None:
@@ -174,7 +176,8 @@ class Executor:
             )
             if controller is not None:
                 controller.attach(obj, pose, self.noise.measure(q))
-        elif attach is False:
+        elif attach is False:  # where the arm let go, before the sim stands it on its slot
+            self._released_at = self.world.state(self.object_id).pose.translation.copy()
             self.world.detach(self.object_id, 'relocated')
             self.monitor.bodies.detach()
             if controller is not None:
