@@ -142,6 +142,9 @@ def ros_node(ros_domain: int) -> Iterator[Any]:
     node.spin_until = spin_until
     node.call = call
     node.wait_matched = wait_matched
+    node.wait_answering = lambda client, timeout_s=30.0: wait_answering(
+        client, spin_until, timeout_s
+    )
     node.wait_action_answering = lambda action, timeout_s=30.0: wait_action_answering(
         action, spin_until, timeout_s
     )

@@ -124,10 +124,9 @@ def test_object_moved_onto_the_path_stops_the_arm_with_the_reason(launch, ros_no
     )
     publisher = ros_node.create_publisher(Scene, '/scene', LATCHED)
     # Matched before sending: a request, or the intruder's scene, written earlier is lost (#18).
-    ros_node.wait_matched(client)
+    ros_node.wait_answering(client)  # a probe answered: both directions match
     # Our own /scene subscription counts as one reader: wait for the motion planner's too.
     assert ros_node.spin_until(lambda: publisher.get_subscription_count() >= 2, 30.0)
-    ros_node.call(client, RelocateObject.Request(object_id=''), 30.0)  # answered: both ways match
     request = RelocateObject.Request(object_id='T', relocated_ids=EVERY_OBSTACLE, execute=True)
     future = client.call_async(request)
     assert ros_node.spin_until(lambda: len(seen['tracking']) > 20, 60.0)
