@@ -1,33 +1,14 @@
 """RetrieveTarget goal validation: every bad field is named in the error."""
 
 import math
-from types import SimpleNamespace
 
 import pytest
 from qtree_task_planner.exceptions import InvalidParameterError, UnknownPolicyError
 from qtree_task_planner.goal import FLOAT_FIELDS, settings_from_goal
 
-DEFAULTS = dict(
-    policy='H-EG',
-    max_episodes=5000,
-    seed=0,
-    alpha=0.5,
-    gamma=0.9,
-    epsilon0=1.0,
-    epsilon_min=1e-4,
-    beta=1e-3,
-    steady_episodes=50,
-    execute=False,
-    feedback_every=10,
-)
 
-
-def _goal(**changes) -> SimpleNamespace:
-    return SimpleNamespace(**{**DEFAULTS, **changes})
-
-
-def test_defaults_are_the_papers() -> None:
-    settings = settings_from_goal(_goal(policy='h-εg', seed=7))
+def test_defaults_are_the_papers(make_goal) -> None:
+    settings = settings_from_goal(make_goal(policy='h-εg', seed=7))
     config = settings.config
     assert (config.policy, config.alpha, config.gamma, config.max_episodes) == (
         'H-EG',
@@ -58,26 +39,26 @@ def test_defaults_are_the_papers() -> None:
         ('seed', -1),
     ],
 )
-def test_bad_fields_are_named(field: str, value: float) -> None:
+def test_bad_fields_are_named(field: str, value: float, make_goal) -> None:
     with pytest.raises(InvalidParameterError, match=f'invalid {field}='):
-        settings_from_goal(_goal(**{field: value}))
+        settings_from_goal(make_goal(**{field: value}))
 
 
-def test_epsilon_min_above_epsilon0() -> None:
+def test_epsilon_min_above_epsilon0(make_goal) -> None:
     with pytest.raises(InvalidParameterError, match=r'epsilon_min.*epsilon0'):
-        settings_from_goal(_goal(epsilon0=0.1, epsilon_min=0.2))
+        settings_from_goal(make_goal(epsilon0=0.1, epsilon_min=0.2))
 
 
-def test_unknown_policy() -> None:
+def test_unknown_policy(make_goal) -> None:
     with pytest.raises(UnknownPolicyError, match=r"invalid policy='SARSA'.*H-EG-SET"):
-        settings_from_goal(_goal(policy='SARSA'))
+        settings_from_goal(make_goal(policy='SARSA'))
 
 
 @pytest.mark.parametrize('value', [math.inf, -math.inf, math.nan], ids=['inf', '-inf', 'nan'])
 @pytest.mark.parametrize('field', FLOAT_FIELDS)
-def test_every_non_finite_float_field_is_named(field: str, value: float) -> None:
+def test_every_non_finite_float_field_is_named(field: str, value: float, make_goal) -> None:
     with pytest.raises(InvalidParameterError, match=f'invalid {field}=.*finite') as err:
-        settings_from_goal(_goal(**{field: value}))  # beta=inf was accepted (#18)
+        settings_from_goal(make_goal(**{field: value}))  # beta=inf was accepted (#18)
     assert err.value.field == field
 
 
@@ -88,7 +69,7 @@ def test_the_float_fields_are_every_float64_of_the_goal() -> None:
     assert set(FLOAT_FIELDS) == {name for name, kind in types.items() if kind == 'double'}
 
 
-def test_a_huge_policy_is_quoted_short() -> None:
+def test_a_huge_policy_is_quoted_short(make_goal) -> None:
     with pytest.raises(UnknownPolicyError, match=r'\(10000 characters\)') as err:
-        settings_from_goal(_goal(policy='P' * 10_000))  # was echoed in full (#18)
+        settings_from_goal(make_goal(policy='P' * 10_000))  # was echoed in full (#18)
     assert len(str(err.value)) < 300

@@ -1,7 +1,5 @@
 """BLOCKER-SEARCH through the trainer surface the task_planner node uses."""
 
-from types import SimpleNamespace
-
 import pytest
 from qtree_task_planner.exceptions import UnknownPolicyError
 from qtree_task_planner.goal import settings_from_goal
@@ -15,22 +13,9 @@ from qtree_task_planner.planners import (
 from qtree_task_planner.synthetic import TOY_MOVABLE, TOY_OPTIMAL_LEVEL, TOY_REQUIREMENTS
 from qtree_task_planner.training import STOP_CANCELLED, QTreeTrainer, TrainingConfig
 
-GOAL = dict(
-    max_episodes=5000,
-    seed=0,
-    alpha=0.5,
-    gamma=0.9,
-    epsilon0=1.0,
-    epsilon_min=1e-4,
-    beta=1e-3,
-    steady_episodes=50,
-    execute=False,
-    feedback_every=10,
-)
 
-
-def test_goal_accepts_the_new_planner_and_names_it_on_errors() -> None:
-    settings = settings_from_goal(SimpleNamespace(policy=' blocker-search', **GOAL))
+def test_goal_accepts_the_new_planner_and_names_it_on_errors(make_goal) -> None:
+    settings = settings_from_goal(make_goal(policy=' blocker-search'))
     assert settings.config.policy == BLOCKER_SEARCH
     with pytest.raises(UnknownPolicyError, match='BLOCKER-SEARCH'):
         canonical_planner_name('A-STAR')
