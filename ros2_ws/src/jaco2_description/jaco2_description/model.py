@@ -44,6 +44,9 @@ CANDLE = np.full(7, math.pi)  # "Vertical": arm straight up [rad]
 CONTINUOUS_LIMIT = 4.0 * math.pi  # limits given to continuous joints [rad]
 FINGER_MAX = 1.51  # proximal finger upper limit [rad]
 FINGER_OPEN = 0.2  # MoveIt "Open" [rad]
+# Widest object the open hand closes on: inner faces of the open fingertips are ±0.046 m from the
+# EE origin (URDF, fingers at FINGER_OPEN), minus 5 mm clearance on each side [m].
+HAND_OPENING_M = 0.082
 
 
 URDF_NAME = 'j2s7s300.urdf'

@@ -3,12 +3,13 @@
 Objects (cylinders, and boxes with probability ``box_share``) are placed by random sequential
 addition, largest first, in a rectangle in front of the robot: x ≥ ``x_min``, centred on y = 0,
 width = ``ASPECT`` × depth. The rectangle's area is set by ``density`` = total footprint area /
-region area (:func:`region_size`; a scene of at most ``SMALL_SCENE`` objects gets at least
-room for them, hence may have a lower density). The target ``'T'`` is drawn among the objects
-inside the arm's side-grasp workspace (:func:`in_side_grasp_workspace`) that stand among the
-clutter: some object is nearer the base within the target's approach corridor and some object is
-farther from the base (never simply the farthest object). The obstacles are ``'O1'``… in order
-of increasing distance from the base. The same arguments always give the same scene.
+region area (:func:`region_size`; a scene of at most ``SMALL_SCENE`` objects gets at least room for
+them, hence may have a lower density). The target ``'T'`` is drawn among the objects inside the
+arm's side-grasp workspace (:func:`in_side_grasp_workspace`) that the open hand can close on (at
+most ``HAND_OPENING_M`` across; the first object drawn always is) and that stand among the clutter:
+some object is nearer the base within the target's approach corridor and some object is farther
+from the base (never simply the farthest object). The obstacles are ``'O1'``… in order of
+increasing distance from the base. The same arguments always give the same scene.
 
 Whether the target can actually be retrieved is checked with the motion planner outside this
 package (``qtree_task_planner.clutter.generate_retrievable``).
@@ -20,7 +21,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from jaco2_description.model import HOME
+from jaco2_description.model import HAND_OPENING_M, HOME
 
 from qtree_scene.exceptions import ScenarioError
 from qtree_scene.footprint import Footprint, overlap
@@ -62,6 +63,11 @@ class _Shape:
     def area(self) -> float:
         """Footprint area [m²]."""
         return self.sx * self.sy if self.box else math.pi * self.radius**2
+
+    @property
+    def grasp_width(self) -> float:
+        """Width the side-grasping hand closes on [m]: the diameter, or a box's narrower edge."""
+        return min(self.sx, self.sy)
 
     @property
     def bound(self) -> float:
@@ -114,6 +120,9 @@ def _check_arguments(
             raise ScenarioError(
                 source, name, f'must satisfy {low} ≤ low ≤ high ≤ {high} m, got {(lo, hi)}'
             )
+    if 2 * radius_range[0] > HAND_OPENING_M:
+        problem = f'low end {radius_range[0]} m: no object the {HAND_OPENING_M} m hand holds'
+        raise ScenarioError(source, 'radius_range', problem)
     if not (math.isfinite(box_share) and 0.0 <= box_share <= 1.0):
         raise ScenarioError(source, 'box_share', f'must be in [0, 1], got {box_share}')
     if not (math.isfinite(gap) and 0 < gap <= 0.1):
@@ -127,12 +136,19 @@ def _draw_shapes(
     height_range: tuple[float, float],
     box_share: float,
 ) -> list[_Shape]:
-    """Cylinders of radius in ``radius_range``; boxes with edges in 2 × ``radius_range``."""
+    """Cylinders of radius in ``radius_range``; boxes with edges in 2 × ``radius_range``.
+
+    The first shape's half widths are clipped to ``HAND_OPENING_M`` / 2, so that every scene has
+    an object the hand can close on (the target's candidates, :func:`_pick_target`).
+    """
     shapes = []
-    for _ in range(n):
+    for index in range(n):
         box = bool(rng.random() < box_share)
         radius = float(rng.uniform(*radius_range))
         sx, sy = (float(v) for v in 2 * rng.uniform(*radius_range, 2))
+        if index == 0:
+            radius, sx, sy = (min(v, HAND_OPENING_M / 2) for v in (radius, sx / 2, sy / 2))
+            sx, sy = 2 * sx, 2 * sy
         height = float(rng.uniform(*height_range))
         if box:
             shapes.append(_Shape(True, 0.0, sx, sy, height))
@@ -208,7 +224,11 @@ def _pick_target(
     rng: np.random.Generator, footprints: list[Footprint], shapes: list[_Shape]
 ) -> int | None:
     """Index of the target: among the clutter if possible, always inside the workspace."""
-    inside = [k for k, fp in enumerate(footprints) if in_side_grasp_workspace(fp.center)]
+    inside = [
+        k
+        for k, fp in enumerate(footprints)
+        if in_side_grasp_workspace(fp.center) and shapes[k].grasp_width <= HAND_OPENING_M
+    ]
     if not inside:
         return None
     if len(footprints) > 1:
@@ -250,8 +270,8 @@ def generate_clutter(
 
     Raises:
         ScenarioError: an argument out of range (field = its name), or no layout found within the
-            budget (field ``'density'``: too dense to pack) or no object landed in the side-grasp
-            workspace (field ``'density'``).
+            budget (field ``'density'``: too dense to pack) or no graspable object landed in the
+            side-grasp workspace (field ``'density'``).
     """
     _check_arguments(n_objects, density, radius_range, height_range, box_share, gap)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -274,7 +294,7 @@ def generate_clutter(
         problem = f'cannot pack {n} objects at density {density} in {LAYOUT_RESTARTS} tries'
         raise ScenarioError('generate_clutter', 'density', problem + '; lower it')
     if target is None:
-        problem = f'no object landed in the side-grasp workspace at density {density}'
+        problem = f'no graspable object landed in the side-grasp workspace at density {density}'
         raise ScenarioError('generate_clutter', 'density', problem + '; raise it')
     scenario = _assemble(n_objects, density, seed, shapes, footprints, target, depth, width, x_min)
     validate_scenario(scenario)

@@ -7,6 +7,7 @@ import math
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from jaco2_description.model import HAND_OPENING_M
 from qtree_scene.exceptions import ScenarioError
 from qtree_scene.footprint import footprint_of, overlap
 from qtree_scene.generator import (
@@ -45,6 +46,8 @@ def test_sizes_density_and_target_placement(scene) -> None:
     # Target inside the side-grasp workspace, never the farthest object.
     target = scenario.target
     assert in_side_grasp_workspace(target.position)
+    across = 2 * target.radius if target.shape == 'cylinder' else min(target.size[:2])
+    assert across <= HAND_OPENING_M  # the open hand can close on it
     reach = [math.hypot(*o.position[:2]) for o in movable]
     assert math.hypot(*target.position[:2]) < max(reach)
     footprints = [footprint_of(o) for o in movable]
@@ -93,6 +96,7 @@ def test_target_among_the_clutter_in_most_scenes() -> None:
         ({'seed': -3}, 'seed'),
         ({'radius_range': (0.05, 0.02)}, 'radius_range'),
         ({'radius_range': (0.0, 0.02)}, 'radius_range'),
+        ({'radius_range': (0.045, 0.06)}, 'radius_range'),  # nothing the hand can close on
         ({'height_range': (0.08, 2.0)}, 'height_range'),
         ({'box_share': 1.5}, 'box_share'),
         ({'gap': 0.0}, 'gap'),
@@ -107,5 +111,5 @@ def test_bad_arguments_name_the_field(kwargs: dict, field: str) -> None:
 
 def test_unpackable_density_is_a_clear_error_not_a_hang() -> None:
     with pytest.raises(ScenarioError, match='cannot pack') as err:
-        generate_clutter(40, 0.4, 0, radius_range=(0.07, 0.08), attempts=50)
+        generate_clutter(40, 0.4, 0, radius_range=(0.041, 0.08), attempts=50)
     assert err.value.field == 'density'

@@ -33,7 +33,7 @@ RANGES: dict[str, tuple[float, float, str]] = {
     'time_limit_s': (1e-3, 600.0, 'planning time limit of one check [s]'),
     'sampling_time_s': (1e-3, 10.0, 'RRTConnect time budget per free-space segment [s]'),
     'seed': (0, 2**31 - 1, 'seed of the sampling planner [-]'),
-    'approach_directions': (1, 16, 'approach yaws tried around the object [-]'),
+    'approach_directions': (1, 32, 'approach yaws tried around the object [-]'),
     'approach_yaw_step_rad': (0.05, 1.6, 'yaw between consecutive approach directions [rad]'),
     'pregrasp_standoff_m': (0.02, 0.5, 'pre-grasp distance before the grasp [m]'),
     'grasp_depth_m': (-0.05, 0.05, 'EE origin beyond the object axis along the approach [m]'),
@@ -68,7 +68,9 @@ class PlannerConfig:
     time_limit_s: float = 5.0  # verification + Cartesian-bounded steps on a loaded 2-core machine
     sampling_time_s: float = 0.05
     seed: int = 0
-    approach_directions: int = 5
+    # ±1.6 rad around the azimuth: front-row objects (reach ≈ 0.4 m) are only reachable from
+    # the side (approached radially, the wrist folds over the base and link 6 hits the object).
+    approach_directions: int = 9
     approach_yaw_step_rad: float = 0.4
     pregrasp_standoff_m: float = 0.1
     grasp_depth_m: float = 0.0

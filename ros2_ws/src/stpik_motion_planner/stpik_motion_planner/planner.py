@@ -22,7 +22,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 import pinocchio as pin
-from jaco2_description.model import Jaco2Model
+from jaco2_description.model import HAND_OPENING_M, Jaco2Model
 from ompl import util as ou
 from qtree_scene.placement import (
     PLACEMENT_TOLERANCE_M,
@@ -67,9 +67,6 @@ CARRY_MIN_Z_M = 0.3  # lowest EE height of the carry transit [m]
 MIN_SEGMENT_S = 0.05  # shortest time between two trajectory samples [s]
 # The simulator stands placed objects on their slot (qtree_scene.placement.settle_pose) [m].
 ENVELOPE_MARGIN_M = PLACEMENT_TOLERANCE_M
-# Widest object the open hand closes on: inner faces of the open fingertips are ±0.046 m from the
-# EE origin (URDF, fingers at 0.2 rad), minus 5 mm clearance on each side [m].
-HAND_OPENING_M = 0.082
 HOVER_M = 0.12  # height above the pre-grasp of the descent when the joint line is blocked [m]
 _OMPL_SEEDED: list[int] = []
 

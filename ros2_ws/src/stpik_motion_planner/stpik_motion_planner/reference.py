@@ -3,12 +3,11 @@
 Used by ``scripts/bench_false_infeasible.py`` to measure how often the real planner answers
 "infeasible" where a motion exists (no ROS import). Never used to answer requests.
 
-:class:`ReferencePlanner` is the motion planner with an exhaustive search: 15 approach yaws
-every 0.2 rad (±1.4 rad around the object's azimuth) instead of 7, two more IK iterations per
-path sample, five more seeded random IK seeds on every failed IK solve, joint-space OMPL
-RRTConnect (FCL validity, the planner's margins) wherever a straight joint transit collides,
-and a 60 s time limit.
-
+:class:`ReferencePlanner` is the motion planner with an exhaustive search: 17 approach yaws every
+0.2 rad (±1.6 rad around the object's azimuth) instead of 9 every 0.4 rad, two more IK iterations
+per path sample, five more seeded random IK seeds on every failed IK solve, joint-space OMPL
+RRTConnect (FCL validity, the planner's margins) wherever a straight joint transit collides, and a
+60 s time limit.
 :func:`verify_motion` checks a whole answer independently of the planner's collision code: the
 ``jaco2_description`` model's own python-fcl bodies every :data:`VERIFY_STEP_RAD` of joint
 motion, against every object still in the scene (table included; the base link and link 1 that
@@ -39,7 +38,7 @@ VERIFY_STEP_RAD = 0.01  # largest joint change between two verified configuratio
 EXTRA_IK_SEEDS = 5  # random IK seeds tried after a failed solve [-]
 RRT_TIME_S = 1.0  # RRTConnect budget of one joint-space transit [s]
 REFERENCE_CONFIG = {
-    'approach_directions': 13,
+    'approach_directions': 17,
     'approach_yaw_step_rad': 0.2,
     'max_iterations': 8,
     'time_limit_s': 60.0,
