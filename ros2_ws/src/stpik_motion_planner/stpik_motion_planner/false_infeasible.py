@@ -120,7 +120,7 @@ def answer_scene(questions: list[Question]) -> list[Answer]:
         ref_s = 0.0
         if not mine.feasible and mine.reason != Reason.TIMEOUT:
             start = time.perf_counter()
-            answer = reference.check(q.object_id, relocated)
+            answer = reference.plan(q.object_id, relocated)  # no blocker sweeps, no cache
             ref_s = time.perf_counter() - start
             ref = answer.feasible
             if answer.feasible:
