@@ -96,9 +96,13 @@ class ThoroughStpik(Stpik):
     def _rrt(self, q_a: np.ndarray, q_b: np.ndarray, scene: SceneWorld) -> np.ndarray | None:
         space = ob.RealVectorStateSpace(7)
         bounds = ob.RealVectorBounds(7)
+        # Continuous joints have infinite limits: search within ±π around both ends there.
+        ends = np.vstack([q_a, q_b])
+        low = np.where(np.isfinite(self.lower), self.lower, ends.min(axis=0) - math.pi)
+        high = np.where(np.isfinite(self.upper), self.upper, ends.max(axis=0) + math.pi)
         for i in range(7):
-            bounds.setLow(i, float(self.lower[i]))
-            bounds.setHigh(i, float(self.upper[i]))
+            bounds.setLow(i, float(low[i]))
+            bounds.setHigh(i, float(high[i]))
         space.setBounds(bounds)
         setup = og.SimpleSetup(space)
         setup.setStateValidityChecker(
