@@ -16,10 +16,11 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from collections import Counter
 from pathlib import Path
 
 from qtree_scene.generator import generate_clutter
-from qtree_task_planner.clutter import check_retrievable
+from qtree_task_planner.clutter import check_retrievable, make_planner
 from tqdm import tqdm
 
 OUT = Path(__file__).resolve().parents[1] / 'benchmarks' / 'results'
@@ -67,8 +68,29 @@ def write(rows: list[dict], meta: dict) -> None:
         '|---|---|---|---|---|---|',
         *table,
         '',
+        *_why(rows),
     ]
     (OUT / 'clutter_solvable.md').write_text('\n'.join(md))
+
+
+def _why(rows: list[dict]) -> list[str]:
+    """Markdown lines: the planner's answers for every object of the untouched scenes."""
+    reasons: Counter = Counter()
+    for r in rows:
+        reasons.update(r.get('start_reasons', {}))
+    total = sum(reasons.values())
+    if not total:
+        return []
+    lines = [
+        f'Answers for every object of the untouched scenes ({total} objects; what the first '
+        'round of the check sees):',
+        '',
+        '| answer | objects | share |',
+        '|---|---|---|',
+    ]
+    for name, count in reasons.most_common():
+        lines.append(f'| {name} | {count} | {count / total:.0%} |')
+    return [*lines, '']
 
 
 def main() -> None:
@@ -78,8 +100,16 @@ def main() -> None:
     start = time.monotonic()
     rows: list[dict] = []
     for n, d, seed in tqdm(jobs, desc='scenes'):
+        scenario = generate_clutter(n, d, seed)
+        planner = make_planner(scenario)
         check = check_retrievable(
-            generate_clutter(n, d, seed), method=args.method, budget_s=args.budget_s
+            scenario, method=args.method, budget_s=args.budget_s, planner=planner
+        )
+        # Why: the answers for every object in the untouched scene (the first round).
+        start_reasons = Counter(
+            r.reason.name
+            for o in scenario.movable_ids
+            if (r := planner.cache.get(o, ())) is not None
         )
         rows.append(
             {
@@ -91,6 +121,7 @@ def main() -> None:
                 'planner_runs': check.planner_runs,
                 'wall_s': check.wall_s,
                 'detail': check.detail,
+                'start_reasons': dict(start_reasons),
             }
         )
         meta['wall_s'] = time.monotonic() - start

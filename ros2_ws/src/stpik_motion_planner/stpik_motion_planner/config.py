@@ -35,6 +35,8 @@ RANGES: dict[str, tuple[float, float, str]] = {
     'seed': (0, 2**31 - 1, 'seed of the sampling planner [-]'),
     'approach_directions': (1, 32, 'approach yaws tried around the object [-]'),
     'approach_yaw_step_rad': (0.05, 1.6, 'yaw between consecutive approach directions [rad]'),
+    'ik_restarts': (0, 50, 'random IK seeds tried after a failed pre-grasp / slot solve [-]'),
+    'rrt_transit_s': (0.0, 10.0, 'RRTConnect budget of a colliding joint transit, 0 = off [s]'),
     'pregrasp_standoff_m': (0.02, 0.5, 'pre-grasp distance before the grasp [m]'),
     'grasp_depth_m': (-0.05, 0.05, 'EE origin beyond the object axis along the approach [m]'),
     'lift_clearance_m': (0.0, 0.5, 'carried object bottom above the tallest object [m]'),
@@ -42,7 +44,7 @@ RANGES: dict[str, tuple[float, float, str]] = {
     'velocity_scale': (0.01, 1.0, 'fraction of the joint velocity limits used [-]'),
     'slot_spacing_m': (0.02, 0.5, 'distance between drop-zone slots [m]'),
 }
-INTEGER_FIELDS = frozenset({'max_iterations', 'seed', 'approach_directions'})
+INTEGER_FIELDS = frozenset({'max_iterations', 'seed', 'approach_directions', 'ik_restarts'})
 
 
 @dataclass
@@ -72,6 +74,9 @@ class PlannerConfig:
     # the side (approached radially, the wrist folds over the base and link 6 hits the object).
     approach_directions: int = 9
     approach_yaw_step_rad: float = 0.4
+    # Fallbacks of .robust_stpik: another IK branch or a detour where the first one fails.
+    ik_restarts: int = 5
+    rrt_transit_s: float = 1.0
     pregrasp_standoff_m: float = 0.1
     grasp_depth_m: float = 0.0
     lift_clearance_m: float = 0.04

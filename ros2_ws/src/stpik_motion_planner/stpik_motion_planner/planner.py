@@ -57,6 +57,7 @@ from stpik_motion_planner.exceptions import (
 )
 from stpik_motion_planner.hand_model import HandModel
 from stpik_motion_planner.result import PlanResult, Reason
+from stpik_motion_planner.robust_stpik import RobustStpik
 from stpik_motion_planner.scene_checks import validate_request, validate_scenario
 from stpik_motion_planner.stpik import Stpik
 from stpik_motion_planner.verifier import Carried, TrajectoryVerifier
@@ -96,7 +97,7 @@ class MotionPlanner:
         self.scenario = scenario
         self.config = config if config is not None else PlannerConfig()
         self.robot = model if model is not None else Jaco2Model()
-        self.stpik = Stpik(self.robot, self.config)
+        self.stpik = RobustStpik(self.robot, self.config)
         self.hand = HandModel(self.robot, self.config.pregrasp_standoff_m)
         self.verifier = TrajectoryVerifier(self.robot)
         self.cache = FeasibilityCache()

@@ -4,10 +4,11 @@ Used by ``scripts/bench_false_infeasible.py`` to measure how often the real plan
 "infeasible" where a motion exists (no ROS import). Never used to answer requests.
 
 :class:`ReferencePlanner` is the motion planner with an exhaustive search: 17 approach yaws every
-0.2 rad (±1.6 rad around the object's azimuth) instead of 9 every 0.4 rad, two more IK iterations
-per path sample, five more seeded random IK seeds on every failed IK solve, joint-space OMPL
-RRTConnect (FCL validity, the planner's margins) wherever a straight joint transit collides, and a
-60 s time limit.
+0.2 rad (±1.6 rad around the object's azimuth) instead of 9 every 0.4 rad, two more STPIK
+iterations per path sample, 12 random IK restarts instead of 5 on every failed IK solve, 2 s
+instead of 1 s of joint-space RRTConnect wherever a straight joint transit collides
+(:mod:`.robust_stpik`), and a 60 s time limit.
+
 :func:`verify_motion` checks a whole answer independently of the planner's collision code: the
 ``jaco2_description`` model's own python-fcl bodies every :data:`VERIFY_STEP_RAD` of joint
 motion, against every object still in the scene (table included; the base link and link 1 that
@@ -23,113 +24,23 @@ import fcl
 import numpy as np
 import pinocchio as pin
 from jaco2_description.model import Jaco2Model
-from ompl import base as ob
-from ompl import geometric as og
 from qtree_scene.scene import Scenario
 
-from stpik_motion_planner.collision import SceneWorld, object_geometry, object_transform
+from stpik_motion_planner.collision import object_geometry, object_transform
 from stpik_motion_planner.config import PlannerConfig
-from stpik_motion_planner.exceptions import MotionPlannerError, PlanningTimeout
 from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import PlanResult
-from stpik_motion_planner.stpik import Stpik
 
 VERIFY_STEP_RAD = 0.01  # largest joint change between two verified configurations [rad]
-EXTRA_IK_SEEDS = 5  # random IK seeds tried after a failed solve [-]
-RRT_TIME_S = 1.0  # RRTConnect budget of one joint-space transit [s]
 REFERENCE_CONFIG = {
     'approach_directions': 17,
     'approach_yaw_step_rad': 0.2,
-    'max_iterations': 8,
+    'max_iterations': 14,
+    'ik_restarts': 12,
+    'rrt_transit_s': 2.0,
     'time_limit_s': 60.0,
 }
 _SKIPPED_LINKS = ('link_base', 'link_1')
-
-
-class ThoroughStpik(Stpik):
-    """STPIK with random IK restarts and RRTConnect transits (reference planner only)."""
-
-    def __init__(self, robot: Jaco2Model, config: PlannerConfig) -> None:
-        super().__init__(robot, config)
-        self._rng = np.random.default_rng(config.seed + 7)
-
-    def converge(self, seed, target, scene, iterations=40, deadline=np.inf):
-        """:meth:`Stpik.converge`, then from :data:`EXTRA_IK_SEEDS` random seeds."""
-        try:
-            return super().converge(seed, target, scene, iterations, deadline)
-        except PlanningTimeout:
-            raise
-        except MotionPlannerError as err:
-            first = err
-        low, high = np.maximum(self.lower, -math.pi), np.minimum(self.upper, 2 * math.pi)
-        for _ in range(EXTRA_IK_SEEDS):
-            try:
-                guess = self._rng.uniform(low, high)
-                return super().converge(guess, target, scene, iterations, deadline)
-            except PlanningTimeout:
-                raise
-            except MotionPlannerError:
-                continue
-        raise first
-
-    def transit(self, q_a, q_b, scene, deadline=np.inf):
-        """Straight joint move, else RRTConnect in joint space (validity: planner margins)."""
-        try:
-            return super().transit(q_a, q_b, scene, deadline)
-        except PlanningTimeout:
-            raise
-        except MotionPlannerError as err:
-            path = self._rrt(np.asarray(q_a), np.asarray(q_b), scene)
-            if path is None:
-                raise err from None
-            return path
-
-    def _valid(self, q: np.ndarray, scene: SceneWorld) -> bool:
-        if np.any(q < self.lower) or np.any(q > self.upper):
-            return False
-        k = self.kinematics(q, scene)
-        c = self.config
-        return all(p.distance > c.self_min_distance_m for p in k.self_pairs) and all(
-            p.distance > c.obstacle_min_distance_m for p in k.scene_pairs
-        )
-
-    def _rrt(self, q_a: np.ndarray, q_b: np.ndarray, scene: SceneWorld) -> np.ndarray | None:
-        space = ob.RealVectorStateSpace(7)
-        bounds = ob.RealVectorBounds(7)
-        # Continuous joints have infinite limits: search within ±π around both ends there.
-        ends = np.vstack([q_a, q_b])
-        low = np.where(np.isfinite(self.lower), self.lower, ends.min(axis=0) - math.pi)
-        high = np.where(np.isfinite(self.upper), self.upper, ends.max(axis=0) + math.pi)
-        for i in range(7):
-            bounds.setLow(i, float(low[i]))
-            bounds.setHigh(i, float(high[i]))
-        space.setBounds(bounds)
-        setup = og.SimpleSetup(space)
-        setup.setStateValidityChecker(
-            lambda s: self._valid(np.array([s[i] for i in range(7)]), scene)
-        )
-        setup.getSpaceInformation().setStateValidityCheckingResolution(
-            self.config.step_rad / 2 / space.getMaximumExtent()
-        )
-        a, b = space.allocState(), space.allocState()
-        for i in range(7):
-            a[i], b[i] = float(q_a[i]), float(q_b[i])
-        setup.setStartAndGoalStates(a, b)
-        setup.setPlanner(og.RRTConnect(setup.getSpaceInformation()))
-        status = setup.solve(RRT_TIME_S)
-        if not setup.haveExactSolutionPath() or 'Exact' not in str(status):
-            return None
-        setup.simplifySolution(0.2)
-        path = setup.getSolutionPath()
-        path.interpolate()
-        states = [
-            np.array([path.getState(i)[j] for j in range(7)]) for i in range(path.getStateCount())
-        ]
-        out = [states[0]]
-        for s in states[1:]:  # samples ≤ step_rad apart, as the straight transit gives
-            n = max(1, math.ceil(float(np.max(np.abs(s - out[-1]))) / self.config.step_rad))
-            out += [out[-1] + (s - out[-1]) * t for t in np.arange(1, n + 1) / n]
-        return np.array(out[1:])
 
 
 class ReferencePlanner(MotionPlanner):
@@ -137,7 +48,6 @@ class ReferencePlanner(MotionPlanner):
 
     def __init__(self, scenario: Scenario, model: Jaco2Model | None = None) -> None:
         super().__init__(scenario, PlannerConfig(**REFERENCE_CONFIG), model)
-        self.stpik = ThoroughStpik(self.robot, self.config)
 
 
 def verify_motion(

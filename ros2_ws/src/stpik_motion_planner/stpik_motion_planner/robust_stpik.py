@@ -1,0 +1,131 @@
+"""STPIK with two fallbacks, used by the planner: random IK restarts and RRTConnect transits.
+
+A check used to answer "infeasible" when the single ready-posture IK seed of the pre-grasp (or of
+the pose above the drop slot) stalled, or when the straight joint move between two solved
+configurations touched an obstacle, although another IK branch or a detour existed: on 300 random
+questions on generated clutter, 30 such answers the reference planner solved, 23 of them with
+these two fallbacks (``benchmarks/results/false_infeasible.md``). No ROS import.
+
+* :meth:`RobustStpik.converge`: after a failed solve from the planner's seed, up to
+  ``config.ik_restarts`` seeds drawn uniformly in the joint ranges (±π on continuous joints),
+  from a generator seeded by ``config.seed`` and the target pose, so that the same question
+  gets the same seeds whatever was asked before (answers are cached by set, Assumption 2).
+* :meth:`RobustStpik.transit`: when the straight joint move collides, joint-space OMPL
+  RRTConnect for ``config.rrt_transit_s`` seconds (validity: joint limits, the self-hit and scene
+  safety margins; 0 turns it off), resampled to at most ``step_rad`` per joint per sample.
+
+Every trajectory still passes the planner's independent verifier before it is returned.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+from ompl import base as ob
+from ompl import geometric as og
+
+from stpik_motion_planner.collision import SceneWorld
+from stpik_motion_planner.exceptions import MotionPlannerError, PlanningTimeout
+from stpik_motion_planner.stpik import Stpik
+
+SEED_RESOLUTION = 1e4  # target pose quantum of the restart generator's seed [1/m] [-]
+
+
+class RobustStpik(Stpik):
+    """:class:`~.stpik.Stpik` with random IK restarts and RRTConnect transits."""
+
+    def converge(self, seed, target, scene, iterations=40, deadline=np.inf):
+        """:meth:`Stpik.converge` from ``seed``, then from ``config.ik_restarts`` random seeds.
+
+        Raises:
+            The first solve's error when every restart fails too; PlanningTimeout at once.
+        """
+        try:
+            return super().converge(seed, target, scene, iterations, deadline)
+        except PlanningTimeout:
+            raise
+        except MotionPlannerError as err:
+            first = err
+        rng = np.random.default_rng(_pose_seed(self.config.seed, target))
+        low, high = np.maximum(self.lower, -math.pi), np.minimum(self.upper, math.pi * 2)
+        for _ in range(int(self.config.ik_restarts)):
+            try:
+                return super().converge(
+                    rng.uniform(low, high), target, scene, iterations, deadline
+                )
+            except PlanningTimeout:
+                raise
+            except MotionPlannerError:
+                continue
+        raise first
+
+    def transit(self, q_a, q_b, scene, deadline=np.inf):
+        """Straight joint move, else RRTConnect in joint space (see the module docstring)."""
+        try:
+            return super().transit(q_a, q_b, scene, deadline)
+        except PlanningTimeout:
+            raise
+        except MotionPlannerError as err:
+            if self.config.rrt_transit_s <= 0.0:
+                raise
+            path = self.rrt(np.asarray(q_a, dtype=float), np.asarray(q_b, dtype=float), scene)
+            if path is None:
+                raise err from None
+            return path
+
+    def valid(self, q: np.ndarray, scene: SceneWorld) -> bool:
+        """Within the joint limits and the self-hit and scene safety margins."""
+        if np.any(q < self.lower) or np.any(q > self.upper):
+            return False
+        k = self.kinematics(q, scene)
+        c = self.config
+        return all(p.distance > c.self_min_distance_m for p in k.self_pairs) and all(
+            p.distance > c.obstacle_min_distance_m for p in k.scene_pairs
+        )
+
+    def rrt(self, q_a: np.ndarray, q_b: np.ndarray, scene: SceneWorld) -> np.ndarray | None:
+        """RRTConnect q_a → q_b [rad] (7,): samples after q_a up to q_b (n, 7), or None."""
+        space = ob.RealVectorStateSpace(7)
+        bounds = ob.RealVectorBounds(7)
+        # Continuous joints have infinite limits: search within ±π around both ends there.
+        ends = np.vstack([q_a, q_b])
+        low = np.where(np.isfinite(self.lower), self.lower, ends.min(axis=0) - math.pi)
+        high = np.where(np.isfinite(self.upper), self.upper, ends.max(axis=0) + math.pi)
+        for i in range(7):
+            bounds.setLow(i, float(low[i]))
+            bounds.setHigh(i, float(high[i]))
+        space.setBounds(bounds)
+        setup = og.SimpleSetup(space)
+        setup.setStateValidityChecker(
+            lambda s: self.valid(np.array([s[i] for i in range(7)]), scene)
+        )
+        setup.getSpaceInformation().setStateValidityCheckingResolution(
+            self.config.step_rad / 2 / space.getMaximumExtent()
+        )
+        a, b = space.allocState(), space.allocState()
+        for i in range(7):
+            a[i], b[i] = float(q_a[i]), float(q_b[i])
+        setup.setStartAndGoalStates(a, b)
+        setup.setPlanner(og.RRTConnect(setup.getSpaceInformation()))
+        status = setup.solve(float(self.config.rrt_transit_s))
+        if not setup.haveExactSolutionPath() or 'Exact' not in str(status):
+            return None
+        setup.simplifySolution(0.2)
+        path = setup.getSolutionPath()
+        path.interpolate()
+        states = [
+            np.array([path.getState(i)[j] for j in range(7)]) for i in range(path.getStateCount())
+        ]
+        out = [states[0]]
+        for s in states[1:]:  # samples ≤ step_rad apart, as the straight transit gives
+            n = max(1, math.ceil(float(np.max(np.abs(s - out[-1]))) / self.config.step_rad))
+            out += [out[-1] + (s - out[-1]) * t for t in np.arange(1, n + 1) / n]
+        return np.array(out[1:])
+
+
+def _pose_seed(seed: int, target: pin.SE3) -> list[int]:
+    """Non-negative integers identifying (config seed, target pose) for ``default_rng``."""
+    values = np.r_[target.translation, target.rotation.ravel()]
+    return [int(seed), *(round(float(v + 10.0) * SEED_RESOLUTION) for v in values)]
