@@ -86,7 +86,12 @@ class RobustStpik(Stpik):
         )
 
     def rrt(self, q_a: np.ndarray, q_b: np.ndarray, scene: SceneWorld) -> np.ndarray | None:
-        """RRTConnect q_a → q_b [rad] (7,): samples after q_a up to q_b (n, 7), or None."""
+        """RRTConnect q_a → q_b [rad] (7,): samples after q_a up to q_b (n, 7), or None.
+
+        None at once when an end itself is invalid (OMPL would only report it on stderr).
+        """
+        if not (self.valid(q_a, scene) and self.valid(q_b, scene)):
+            return None
         space = ob.RealVectorStateSpace(7)
         bounds = ob.RealVectorBounds(7)
         # Continuous joints have infinite limits: search within ±π around both ends there.

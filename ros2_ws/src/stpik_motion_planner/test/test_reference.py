@@ -34,3 +34,18 @@ def test_ik_restarts_are_seeded_by_the_question(robot, free_scene) -> None:
     assert _pose_seed(0, pose) == _pose_seed(0, pin.SE3(pose))
     assert _pose_seed(0, pose) != _pose_seed(0, other) != _pose_seed(1, other)
     assert min(_pose_seed(0, pin.SE3(-np.eye(3), -pose.translation))) >= 0
+
+
+def test_rrt_refuses_an_invalid_end_before_ompl(robot, monkeypatch) -> None:
+    """An end past a joint limit is refused without an OMPL run (which only logs to stderr)."""
+    from stpik_motion_planner import robust_stpik
+
+    def no_ompl(*_args):
+        raise AssertionError('OMPL started for an invalid end')
+
+    monkeypatch.setattr(robust_stpik.og, 'SimpleSetup', no_ompl)
+    stpik = RobustStpik(robot, PlannerConfig())
+    q_a = np.asarray(HOME, dtype=float)
+    beyond = q_a.copy()
+    beyond[1] = stpik.upper[1] + 0.1  # joint 2 past its limit
+    assert stpik.rrt(q_a, beyond, SceneWorld([])) is None
