@@ -27,10 +27,11 @@ import numpy as np
 from qtree_task_planner.blocker_search import BlockerSearchConfig, blocker_search
 from qtree_task_planner.exact import solve_exact
 from qtree_task_planner.exceptions import OracleUnavailableError, SearchLimitExceededError
-from qtree_task_planner.oracle import FeasibilityAnswer, SetKey, ask
+from qtree_task_planner.oracle import FeasibilityAnswer, SetKey, ask, ask_clear
 from qtree_task_planner.training import QTreeTrainer, TrainingConfig
 
 METHODS = ('exact', 'H-EG', 'H-EG-SET', 'BLOCKER-SEARCH')
+CLEAR_ZONE = '<empty drop zone>'  # marks a verification query's key (never an object id)
 
 
 @dataclass(frozen=True)
@@ -85,8 +86,24 @@ class SceneOracle:
         self.inner = inner
         self.sound_blockers = bool(getattr(inner, 'sound_blockers', False))
         self.answers: dict[SetKey, FeasibilityAnswer] = {}
+        self.cleared: dict[SetKey, bool] = {}
         self.cost_s: dict[SetKey, float] = {}
         self.spent_s = 0.0
+
+    @property
+    def has_clear_zone(self) -> bool:
+        """Whether the real oracle answers verification queries apart (the planner does)."""
+        return hasattr(self.inner, 'clear_zone_feasible')
+
+    def clear_zone(self, relocated: tuple[str, ...], object_id: str) -> tuple[SetKey, bool]:
+        """(key, answer) of a verification query (:func:`~.oracle.ask_clear`), cached, timed."""
+        key = (frozenset(relocated) | {CLEAR_ZONE}, object_id)
+        if key not in self.cleared:
+            start = time.perf_counter()
+            self.cleared[key] = ask_clear(self.inner, tuple(relocated), object_id)
+            self.cost_s[key] = time.perf_counter() - start
+            self.spent_s += self.cost_s[key]
+        return key, self.cleared[key]
 
     def answer(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
         """Cached answer, or one real run (timed)."""
@@ -135,6 +152,22 @@ class MethodOracle:
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """Feasibility only (for the exact search and the learners)."""
         return self.answer(relocated, object_id).feasible
+
+    def clear_zone_feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
+        """Verification query; the ordinary answer when the real oracle has none apart."""
+        if not self.scene.has_clear_zone:
+            return self.feasible(relocated, object_id)
+        key = (frozenset(relocated) | {CLEAR_ZONE}, object_id)
+        if key not in self._seen:
+            if self.planner_runs >= self.max_runs:
+                raise BudgetHitError('planner_runs')
+            if time.monotonic() > self.deadline:
+                raise BudgetHitError('time')
+            self.scene.clear_zone(relocated, object_id)
+            self._seen.add(key)
+            self.planner_runs += 1
+            self.charged_s += self.scene.cost_s[key]
+        return self.scene.cleared[key]
 
 
 def build_scene(task: ScaleTask) -> tuple[tuple[str, ...], str, Any]:

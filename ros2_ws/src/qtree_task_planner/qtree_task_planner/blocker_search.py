@@ -1,16 +1,19 @@
 """BLOCKER-SEARCH (ours, issue #14): a conflict-directed best-first search over SETS of relocated
 obstacles that only considers objects that block the target or block a blocker.
 
-Model. By Assumption 2 relocating o after S depends on the set S only; we also assume
-MONOTONICITY (removing more objects never makes a feasible relocation infeasible; true of the
-clearing-set model of :class:`~qtree_task_planner.oracle.TableOracle` and of a collision-only
-planner). An infeasible answer for (S, o) with blockers B yields the CONSTRAINT "before o, at least
-one object of X must be relocated", X = B minus S, o and the target. A constraint is SOUND when
-every set whose removal makes o feasible meets X; with monotonicity this is the same as: o stays
-infeasible when every obstacle except X is removed. Sound constraints come from an oracle that
-declares ``sound_blockers`` (complete reports), or are VERIFIED by that one extra query,
-(all obstacles but X relocated, o); a report that fails the check, or no report at all
-(``blocking_ids=None``), is replaced by the trivial sound constraint X = all obstacles not in S.
+Model. By Assumption 2 relocating o after S depends on the set S only; we also assume MONOTONICITY
+(removing more objects never makes a feasible relocation infeasible; true of the clearing-set model
+of :class:`~qtree_task_planner.oracle.TableOracle` and of a collision-only planner). An infeasible
+answer for (S, o) with blockers B yields the CONSTRAINT "before o, at least one object of X must be
+relocated", X = B minus S, o and the target. A constraint is SOUND when every set whose removal
+makes o feasible meets X; with monotonicity this is the same as: o stays infeasible when every
+obstacle except X is removed. Sound constraints come from an oracle that declares
+``sound_blockers`` (complete reports), or are VERIFIED by that one extra query, (all obstacles but
+X relocated, o), asked with the empty drop zone where the oracle can
+(:func:`~qtree_task_planner.oracle.ask_clear`: the real planner would otherwise plan into slot N −
+|X| among as many placed objects, and a drop-zone failure would confirm a wrong report); a report
+that fails the check, or no report at all (``blocking_ids=None``), is replaced by the trivial sound
+constraint X = all obstacles not in S.
 
 Search. A set S of obstacles is a CANDIDATE when its objects can be ordered so that each one's
 known constraints are met by the objects before it, and the target's by all of S (known
@@ -24,7 +27,8 @@ a failed query adds a constraint and the search resumes at the same k; when no c
 size k is left, k grows by one. A tested candidate that succeeds is returned.
 
 When the answer is provably optimal (``certified=True`` in the result): Assumption 2,
-monotonicity, and every constraint sound (declared or verified, see above). Then
+monotonicity (for the planner: in the clutter, and no relocation harder in the empty drop zone
+than among placed objects), and every constraint sound (declared or verified, see above). Then
 ``status='optimal'`` means no feasible sequence has fewer objects, and ``status='unsolvable'``
 means no feasible sequence exists at all (e.g. the target blocked by nothing movable). With
 ``verify=False`` on an oracle whose reports are not declared sound (the planner's response field
@@ -45,7 +49,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from qtree_task_planner.exceptions import InvalidParameterError, InvalidScenarioError
-from qtree_task_planner.oracle import FeasibilityAnswer, FeasibilityOracle, SetKey, ask
+from qtree_task_planner.oracle import (
+    FeasibilityAnswer,
+    FeasibilityOracle,
+    SetKey,
+    ask,
+    ask_clear,
+)
 
 STATUS_OPTIMAL = 'optimal'
 STATUS_UNSOLVABLE = 'unsolvable'
@@ -180,6 +190,7 @@ class BlockerSearch:
         self.certified = sound or self.verify
         self.constraints: dict[str, list[frozenset[str]]] = {}
         self.answers: dict[SetKey, FeasibilityAnswer] = {}
+        self._clear: dict[SetKey, bool] = {}
         self.queries = self.verifications = self.candidates = self.expansions = 0
         self.lower_bound = 1
         self._cut = False
@@ -202,6 +213,16 @@ class BlockerSearch:
             self.queries += 1
             self.answers[key] = ask(self.oracle, order, obj)
         return self.answers[key]
+
+    def _verify(self, rest: tuple[str, ...], obj: str) -> bool:
+        """Verification query: ``obj`` feasible once ``rest`` are gone, empty drop zone."""
+        key = (frozenset(rest), obj)
+        if key not in self._clear:
+            self._check_budget()
+            self.queries += 1
+            self.verifications += 1
+            self._clear[key] = ask_clear(self.oracle, rest, obj)
+        return self._clear[key]
 
     def _met(self, obj: str, done: frozenset[str]) -> bool:
         """Every known constraint of ``obj`` is met by ``done``."""
@@ -226,8 +247,7 @@ class BlockerSearch:
             blocking = frozenset(blockers) & self.all - done - {obj}
             if self.verify and blocking != trivial:
                 rest = tuple(o for o in self.obstacles if o not in blocking and o != obj)
-                self.verifications += (frozenset(rest), obj) not in self.answers
-                if self._ask(rest, obj).feasible:  # the report missed an approach
+                if self._verify(rest, obj):  # the report missed an approach
                     blocking = trivial
         self.constraints.setdefault(obj, []).append(blocking)
 

@@ -20,6 +20,13 @@ whose removal would make the object feasible contains at least one reported bloc
 monotone feasibility: the object stays infeasible when every movable object except the reported
 ones is removed). :class:`TableOracle` reports are sound; the planner's are not guaranteed, and
 :mod:`qtree_task_planner.blocker_search` verifies them.
+
+Verification queries (:func:`ask_clear`): "is o feasible once S is gone, placing it in the EMPTY
+drop zone?". An oracle may implement ``clear_zone_feasible(relocated, object_id)`` for it; the
+real planner does (drop slot 0, no placed objects standing), because its ordinary answer after a
+large S plans into slot |S| among |S| placed envelopes, where the drop zone, not the clutter, can
+say no: removing objects then stops being monotone and a verification would wrongly confirm a
+blocker report. Oracles without it answer with ``feasible()``.
 """
 
 from __future__ import annotations
@@ -123,6 +130,17 @@ class TableOracle:
         return FeasibilityAnswer(False, tuple(sorted({o for need in left for o in need})))
 
 
+def ask_clear(oracle: Any, relocated: tuple[str, ...], object_id: str) -> bool:
+    """Is ``object_id`` feasible once ``relocated`` are gone, placing it in the empty drop zone?
+
+    Uses ``oracle.clear_zone_feasible`` when the oracle has it, else ``oracle.feasible``.
+    """
+    clear = getattr(oracle, 'clear_zone_feasible', None)
+    if clear is None:
+        return bool(oracle.feasible(tuple(relocated), object_id))
+    return bool(clear(tuple(relocated), object_id))
+
+
 class MemoOracle:
     """Memoise another oracle on ``(frozenset(relocated), object_id)``.
 
@@ -142,7 +160,17 @@ class MemoOracle:
         self.queries = 0
         self.results: dict[SetKey, bool] = {}
         self.answers: dict[SetKey, FeasibilityAnswer] = {}
+        self.clear_results: dict[SetKey, bool] = {}
         self.sound_blockers = bool(getattr(inner, 'sound_blockers', False))
+
+    def clear_zone_feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
+        """Verification query (:func:`ask_clear`), memoised and counted like the others."""
+        self.queries += 1
+        key = (frozenset(relocated), object_id)
+        if key not in self.clear_results:
+            self.clear_results[key] = ask_clear(self.inner, tuple(relocated), object_id)
+            self.planner_runs += 1
+        return self.clear_results[key]
 
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """Answer from the memo, or ask ``inner`` once."""
@@ -197,6 +225,14 @@ class MotionPlannerOracle:
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """Ask the planner (``check(object_id, relocated_ids)``) and count real runs."""
         return self.answer(relocated, object_id).feasible
+
+    def clear_zone_feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
+        """The planner's plan into drop slot 0 with no placed object standing (a real run)."""
+        self.queries += 1
+        self.planner_runs += 1
+        result = self.planner.plan(object_id, list(relocated), slot_index=0)
+        self.planning_time_s += float(getattr(result, 'planning_time', 0.0) or 0.0)
+        return bool(result.feasible)
 
     def answer(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
         """Ask the planner; blockers from the result's ``blocking_ids`` (issue #14, item 3).

@@ -139,3 +139,42 @@ def test_bad_scenes_are_rejected() -> None:
         blocker_search(('O1', 'T'), 'T', TableOracle({}))
     with pytest.raises(InvalidScenarioError, match='duplicate'):
         blocker_search(('O1', 'O1'), 'T', TableOracle({}))
+
+
+class _DropZoneOracle:
+    """T needs O1 gone; the report for T wrongly names O2. A full drop zone (≥ 3 objects
+    relocated) makes every ordinary answer infeasible, as far drop slots do on the real planner;
+    ``clear_zone_feasible`` answers with the empty drop zone (monotone)."""
+
+    def __init__(self, clear_zone: bool) -> None:
+        self.planner_runs = 0
+        if not clear_zone:
+            self.clear_zone_feasible = None  # ask_clear then falls back to feasible()
+
+    def _clutter(self, relocated: tuple[str, ...], object_id: str) -> bool:
+        return object_id != 'T' or 'O1' in relocated
+
+    def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
+        return self.answer(relocated, object_id).feasible
+
+    def answer(self, relocated, object_id):
+        from qtree_task_planner.oracle import FeasibilityAnswer
+
+        self.planner_runs += 1
+        ok = len(relocated) < 3 and self._clutter(relocated, object_id)
+        return FeasibilityAnswer(ok, () if ok else ('O2',))
+
+    def clear_zone_feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
+        self.planner_runs += 1
+        return self._clutter(relocated, object_id)
+
+
+def test_verification_uses_the_empty_drop_zone() -> None:
+    """Before: the verification (T after O1, O3, O4) hit the full drop zone and confirmed the
+    wrong report {O2}, so the certified optimum (O1, T) was missed."""
+    obstacles = ('O1', 'O2', 'O3', 'O4')
+    found = blocker_search(obstacles, 'T', _DropZoneOracle(clear_zone=True))
+    assert found.status == 'optimal' and found.sequence == ('O1', 'T')
+    assert found.verifications >= 1
+    wrong = blocker_search(obstacles, 'T', _DropZoneOracle(clear_zone=False))
+    assert wrong.sequence != ('O1', 'T')  # the failure mode the clear-zone query removes
