@@ -216,6 +216,7 @@ def _run_method(method: str, task: ScaleTask, obstacles, target, scene: SceneOra
             budget_hit=found.budget_hit,
             lower_bound=found.lower_bound,
             certified=found.certified,
+            contradictions=found.contradictions,
             status=found.status,
         )
     else:

@@ -34,7 +34,9 @@ means no feasible sequence exists at all (e.g. the target blocked by nothing mov
 ``verify=False`` on an oracle whose reports are not declared sound (the planner's response field
 names only its most promising approach), the search is a HEURISTIC: constraints may be wrong, the
 answer is feasible (every step was checked) but may be longer than the optimum, and
-``unsolvable`` may be wrong. Without monotonicity a verification can also be wrong.
+``unsolvable`` may be wrong. Without monotonicity a verification can also be wrong; a constraint
+contradicted by a known feasible answer (o feasible after a set that meets none of its objects)
+proves that monotonicity fails, and the result is then uncertified (``contradictions`` > 0).
 
 Budget. ``max_planner_runs`` (real oracle runs), ``time_limit_s`` and ``max_expansions`` (DFS
 nodes of the candidate enumeration) bound the search; hitting one returns ``status='budget'``
@@ -114,6 +116,8 @@ class BlockerSearchResult:
         planner_runs: real oracle runs of this search (verifications included).
         queries: questions asked to the oracle (cached repeats excluded).
         verifications: of those, soundness checks of reports.
+        contradictions: constraints contradicted by a known feasible answer (non-monotone
+            feasibility: the result is then a heuristic, ``certified=False``).
         candidates: candidate sets tested with real queries.
         expansions: DFS nodes of the candidate enumeration.
         constraints: constraints learned.
@@ -129,6 +133,7 @@ class BlockerSearchResult:
     planner_runs: int
     queries: int
     verifications: int
+    contradictions: int
     candidates: int
     expansions: int
     constraints: int
@@ -192,6 +197,7 @@ class BlockerSearch:
         self.answers: dict[SetKey, FeasibilityAnswer] = {}
         self._clear: dict[SetKey, bool] = {}
         self.queries = self.verifications = self.candidates = self.expansions = 0
+        self.contradictions = 0
         self.lower_bound = 1
         self._cut = False
         self._failed: dict[frozenset[str], bool] = {}
@@ -249,6 +255,13 @@ class BlockerSearch:
                 rest = tuple(o for o in self.obstacles if o not in blocking and o != obj)
                 if self._verify(rest, obj):  # the report missed an approach
                     blocking = trivial
+        if any(
+            k[1] == obj and a.feasible and not k[0] & blocking for k, a in self.answers.items()
+        ):
+            # obj was feasible after a set meeting no object of the constraint: feasibility is
+            # not monotone here (an order effect), so no bound or optimum is proven any more.
+            self.certified = False
+            self.contradictions += 1
         self.constraints.setdefault(obj, []).append(blocking)
 
     # -- candidate enumeration --
@@ -392,6 +405,7 @@ class BlockerSearch:
             planner_runs=self.oracle.planner_runs - self._runs0,
             queries=self.queries,
             verifications=self.verifications,
+            contradictions=self.contradictions,
             candidates=self.candidates,
             expansions=self.expansions,
             constraints=sum(len(v) for v in self.constraints.values()),

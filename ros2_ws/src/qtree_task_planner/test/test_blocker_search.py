@@ -11,6 +11,7 @@ from qtree_task_planner.blocker_search import (
     STATUS_BUDGET,
     STATUS_OPTIMAL,
     STATUS_UNSOLVABLE,
+    BlockerSearch,
     BlockerSearchConfig,
     blocker_search,
 )
@@ -178,3 +179,39 @@ def test_verification_uses_the_empty_drop_zone() -> None:
     assert found.verifications >= 1
     wrong = blocker_search(obstacles, 'T', _DropZoneOracle(clear_zone=False))
     assert wrong.sequence != ('O1', 'T')  # the failure mode the clear-zone query removes
+
+
+class _OrderEffectOracle:
+    """O2 is free at first but infeasible once O1 is gone (reported blocked by O3): an order
+    effect no set-based constraint can express. T needs O2 gone."""
+
+    sound_blockers = True
+
+    def __init__(self) -> None:
+        self.planner_runs = 0
+
+    def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
+        return self.answer(relocated, object_id).feasible
+
+    def answer(self, relocated, object_id):
+        from qtree_task_planner.oracle import FeasibilityAnswer
+
+        self.planner_runs += 1
+        if object_id == 'O2':
+            ok = 'O1' not in relocated or 'O3' in relocated
+            return FeasibilityAnswer(ok, () if ok else ('O3',))
+        if object_id == 'T':
+            ok = 'O2' in relocated
+            return FeasibilityAnswer(ok, () if ok else ('O2',))
+        return FeasibilityAnswer(True, ())
+
+
+def test_a_contradicted_constraint_uncertifies_the_result() -> None:
+    """Before: 'O2 needs O3 first' was kept as sound although O2 was feasible after nothing."""
+    search = BlockerSearch(('O1', 'O2', 'O3'), 'T', _OrderEffectOracle())
+    search.query((), 'O2')
+    search.query(('O1',), 'O2')  # the order effect
+    result = search.run()
+    assert result.contradictions == 1 and result.certified is False
+    clean = blocker_search(('O1', 'O2', 'O3'), 'T', _OrderEffectOracle())
+    assert clean.certified and clean.contradictions == 0 and clean.sequence == ('O2', 'T')
