@@ -187,7 +187,9 @@ def _layout(
             near = (
                 f
                 for f in placed.values()
-                if math.dist(f.center, centre) <= b + _bound(f) + gap  # cheap bounding test
+                # Cheap bounding test; 2·gap because overlap() grows rectangles by gap per axis,
+                # up to gap·√2 at their corners (two boxes corner to corner were never compared).
+                if math.dist(f.center, centre) <= b + _bound(f) + 2 * gap
             )
             if not any(overlap(fp, f, gap) for f in near):
                 placed[k] = fp

@@ -61,7 +61,7 @@ def test_scenario_files_round_trip(name: str) -> None:
     assert parsed.name == scenario.name
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=25, deadline=None, derandomize=True)  # the same examples every run (CI)
 @given(n=st.integers(0, 20), seed=st.integers(0, 10_000), yaw=st.floats(-3.1, 3.1))
 def test_generated_scenes_round_trip(n: int, seed: int, yaw: float) -> None:
     data = scenario_to_dict(generate_clutter(n, 0.1, seed))

@@ -151,7 +151,7 @@ def test_footprint_overlap_cases() -> None:
     assert not overlap(rect, Footprint((0.3, 0.0), yaw=0.0, half_size=(0.12, 0.05)))
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40, deadline=None, derandomize=True)  # the same examples every run (CI)
 @given(
     n=st.integers(min_value=0, max_value=20),
     density=st.floats(min_value=0.02, max_value=0.3),

@@ -73,7 +73,7 @@ def test_free_target_and_no_obstacles() -> None:
     assert result.sequence == ('T',) and result.planner_runs == 1
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60, deadline=None, derandomize=True)  # the same examples every run (CI)
 @given(
     seed=st.integers(0, 10_000),
     n=st.integers(1, 8),

@@ -20,7 +20,7 @@ from stpik_motion_planner.stpik import (
 from stpik_motion_planner.tasks import TaskRows
 
 
-@settings(max_examples=30, deadline=None)
+@settings(max_examples=30, deadline=None, derandomize=True)  # the same examples every run (CI)
 @given(st.lists(st.floats(-2, 2), min_size=14, max_size=14))
 def test_hierarchy_keeps_the_first_task_exact(values):
     rng = np.random.default_rng(abs(hash(tuple(values))) % 2**32)
@@ -40,7 +40,7 @@ def test_hierarchy_keeps_the_first_task_exact(values):
     assert np.allclose(dq, best, atol=1e-6)
 
 
-@settings(max_examples=30, deadline=None)
+@settings(max_examples=30, deadline=None, derandomize=True)  # the same examples every run (CI)
 @given(st.integers(0, 2**32 - 1), st.floats(0.0, 1e-2))
 def test_one_svd_gives_both_pseudo_inverses_bit_identically(seed, scale):
     """pinv_pair (one SVD) equals damped_pinv and truncated_pinv exactly, also where damping
