@@ -10,6 +10,7 @@ Usage:
     python scripts/bench_scale.py                          # real planner, full grid, one core
     python scripts/bench_scale.py --oracle synthetic --workers 2
     python scripts/bench_scale.py --n 10 20 --scenes 2 --methods exact BLOCKER-SEARCH
+    python scripts/bench_scale.py --merge part_a.json part_b.json   # one report from runs in parts
 """
 
 from __future__ import annotations
@@ -60,6 +61,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--search-time-s', type=float, default=120.0)
     parser.add_argument('--out', type=Path, default=RESULTS)
     parser.add_argument('--tag', default='', help='suffix of the output file names')
+    parser.add_argument(
+        '--merge', type=Path, nargs='+', metavar='JSON', help='write one report from earlier runs'
+    )
     args = parser.parse_args(argv)
     positive = (
         min(args.n) >= 0
@@ -74,8 +78,51 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     return args
 
 
+def merged(paths: list[Path]) -> tuple[list[dict], dict]:
+    """Records and meta of earlier runs' JSON files (same oracle and budgets required).
+
+    Raises:
+        SystemExit: a file is missing, not a scale report, or its settings differ.
+    """
+    records: list[dict] = []
+    metas = []
+    for path in paths:
+        try:
+            payload = json.loads(path.read_text())
+            records += payload['records']
+            metas.append(payload['meta'])
+        except (OSError, ValueError, KeyError, TypeError) as err:
+            sys.exit(f'--merge: {path} is not a bench_scale JSON report ({err})')
+    fixed = ('wall_time_s', 'scenes')
+    if any(
+        {k: v for k, v in m.items() if k not in fixed}
+        != {k: v for k, v in metas[0].items() if k not in fixed}
+        for m in metas
+    ):
+        sys.exit('--merge: the reports were run with different oracles, workers or budgets')
+    meta = {**metas[0], 'wall_time_s': sum(m['wall_time_s'] for m in metas)}
+    meta['merged_from'] = [p.name for p in paths]
+    return records, meta
+
+
+def write(records: list[dict], meta: dict, out: Path, stem: str) -> None:
+    """scale{tag}.json / .md / .png from the per-scene records."""
+    rows = summarize(records)
+    out.mkdir(parents=True, exist_ok=True)
+    payload = {'meta': meta, 'rows': rows, 'records': records}
+    (out / f'{stem}.json').write_text(json.dumps(payload, indent=1, default=str))
+    report = markdown(rows, {**meta, 'records': records})
+    (out / f'{stem}.md').write_text(report)
+    plot(rows, out / f'{stem}.png')
+    print(report)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
+    if args.merge:
+        records, meta = merged(args.merge)
+        write(records, meta, args.out, f'scale{args.tag}')
+        return 0
     started = time.monotonic()
     tasks = [
         ScaleTask(
@@ -97,7 +144,6 @@ def main(argv: list[str] | None = None) -> int:
     ]
     per_scene = run_all(tasks, args.workers, args.oracle, {}, args.ray, run_scene, 'scenes')
     records = [r for scene in per_scene for r in scene]
-    rows = summarize(records)
     meta = {
         'oracle': args.oracle,
         'scenes': args.scenes,
@@ -111,14 +157,7 @@ def main(argv: list[str] | None = None) -> int:
         'wall_time_s': time.monotonic() - started,
         'notes': NOTES,
     }
-    args.out.mkdir(parents=True, exist_ok=True)
-    stem = f'scale{args.tag}'
-    payload = {'meta': meta, 'rows': rows, 'records': records}
-    (args.out / f'{stem}.json').write_text(json.dumps(payload, indent=1, default=str))
-    report = markdown(rows, {**meta, 'records': records})
-    (args.out / f'{stem}.md').write_text(report)
-    plot(rows, args.out / f'{stem}.png')
-    print(report)
+    write(records, meta, args.out, f'scale{args.tag}')
     return 0
 
 

@@ -51,3 +51,22 @@ def test_script_rejects_bad_flags() -> None:
     for argv in (['--scenes', '0'], ['--densities', '0.9'], ['--workers', '0']):
         with pytest.raises(SystemExit):
             bench_scale.parse_args(argv)
+
+
+def test_merge_writes_one_report_from_runs_in_parts(tmp_path) -> None:
+    import json
+
+    import bench_scale
+
+    common = ['--oracle', 'synthetic', '--scenes', '2', '--densities', '0.15', '--out']
+    for n in ('4', '6'):
+        assert bench_scale.main([*common, str(tmp_path), '--n', n, '--tag', f'_{n}']) == 0
+    parts = [str(tmp_path / 'scale_4.json'), str(tmp_path / 'scale_6.json')]
+    assert bench_scale.main(['--merge', *parts, '--out', str(tmp_path)]) == 0
+    report = json.loads((tmp_path / 'scale.json').read_text())
+    assert {r['n_obstacles'] for r in report['rows']} == {4, 6}
+    assert len(report['records']) == 2 * 2 * len(bench_scale.METHODS)
+    assert (tmp_path / 'scale.md').exists() and (tmp_path / 'scale.png').exists()
+    (tmp_path / 'bad.json').write_text('{"rows": []}')
+    with pytest.raises(SystemExit, match='not a bench_scale JSON'):
+        bench_scale.main(['--merge', str(tmp_path / 'bad.json'), '--out', str(tmp_path)])
