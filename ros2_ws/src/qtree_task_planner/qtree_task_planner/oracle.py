@@ -164,7 +164,10 @@ class MemoOracle:
         self.sound_blockers = bool(getattr(inner, 'sound_blockers', False))
 
     def clear_zone_feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
-        """Verification query (:func:`ask_clear`), memoised and counted like the others."""
+        """Verification query (:func:`ask_clear`), memoised and counted like the others; the
+        ordinary memoised answer when ``inner`` has no verification query of its own."""
+        if not hasattr(self.inner, 'clear_zone_feasible'):
+            return self.feasible(relocated, object_id)
         self.queries += 1
         key = (frozenset(relocated), object_id)
         if key not in self.clear_results:
