@@ -123,6 +123,9 @@ def test_memo_oracle_passes_reports_through() -> None:
     assert memo.answer((), 'T').blocking_ids and memo.planner_runs == 1
     result = blocker_search(TOY_OBSTACLES, 'T', memo)
     assert len(result.sequence) == TOY_OPTIMAL_LEVEL
+    runs = memo.planner_runs
+    assert memo.clear_zone_feasible((), 'T') is False  # a table has no drop zone: same answer
+    assert memo.planner_runs == runs  # and no second run for it
 
 
 @pytest.mark.parametrize(
