@@ -100,9 +100,23 @@ def merged(paths: list[Path]) -> tuple[list[dict], dict]:
         for m in metas
     ):
         sys.exit('--merge: the reports were run with different oracles, workers or budgets')
-    meta = {**metas[0], 'wall_time_s': sum(m['wall_time_s'] for m in metas)}
+    meta = {**metas[0], 'wall_time_s': sum(m['wall_time_s'] for m in metas)}  # parts' sum
+    counts = sorted({m['scenes'] for m in metas}, reverse=True)
+    if len(counts) > 1:  # e.g. fewer scenes at N = 50: say which N got how many
+        per_n = {n: m['scenes'] for m, p in zip(metas, paths, strict=True) for n in _sizes(p)}
+        meta['scenes'] = ', '.join(
+            f'{c} (N = {_join(n for n in per_n if per_n[n] == c)})' for c in counts
+        )
     meta['merged_from'] = [p.name for p in paths]
     return records, meta
+
+
+def _sizes(path: Path) -> list[int]:
+    return sorted({r['n_obstacles'] for r in json.loads(path.read_text())['records']})
+
+
+def _join(values) -> str:
+    return ', '.join(str(v) for v in sorted(values))
 
 
 def write(records: list[dict], meta: dict, out: Path, stem: str) -> None:
