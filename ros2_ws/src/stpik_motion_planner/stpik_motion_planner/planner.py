@@ -196,35 +196,25 @@ class MotionPlanner:
         try:
             if yaws is None:
                 yaws = approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad)
+            # Pass 1: every approach with the plain STPIK (fast); pass 2, only when all failed:
+            # the sampled approaches again with the fallbacks of .robust_stpik (IK restarts,
+            # RRTConnect transits). Same feasibility as one pass with fallbacks, far faster.
+            sampled = []
             for yaw in yaws:
                 t0 = time.perf_counter()
                 path = self._sample(sampler, scene, obj, yaw, slot, slot_yaw, failures)
                 timings['sampling'] += time.perf_counter() - t0
                 if path is None:
                     continue
-                try:
-                    trajectory, grasp_index, release_index = self._track(
-                        path, scene, obj, deadline, timings
-                    )
-                except PlanningTimeout:
-                    raise
-                except MotionPlannerError as err:
-                    failures.append(err)
-                    continue
-                t0 = time.perf_counter()
-                report = self.verifier.verify(
-                    trajectory, standing, Carried(obj, grasp_index, release_index)
-                )
-                timings['verify'] += time.perf_counter() - t0
-                if not report.ok:
-                    carried = any('carried' in (v.name_a, v.name_b) for v in report.violations)
-                    failures.append(
-                        VerificationFailed(
-                            f'yaw {path.approach_yaw:.2f} rad: {report.summary()}', carried
-                        )
-                    )
-                    continue
-                return self._success(path, trajectory, grasp_index, release_index, start, timings)
+                sampled.append(path)
+                with self.stpik.plain():
+                    done = self._attempt(path, scene, standing, obj, deadline, timings, failures)
+                if done is not None:
+                    return self._success(path, *done, start, timings)
+            for path in sampled if self.stpik.has_fallbacks else ():
+                done = self._attempt(path, scene, standing, obj, deadline, timings, failures)
+                if done is not None:
+                    return self._success(path, *done, start, timings)
             if time.perf_counter() > deadline:
                 raise PlanningTimeout(time.perf_counter() - start, c.time_limit_s)
         except PlanningTimeout as err:
@@ -235,6 +225,42 @@ class MotionPlanner:
         return PlanResult(
             False, error.reason, str(error), planning_time=_since(start), timings=timings
         )
+
+    def _attempt(
+        self,
+        path: CartesianPath,
+        scene: SceneWorld,
+        standing: list[ObjectSpec],
+        obj: ObjectSpec,
+        deadline: float,
+        timings: dict[str, float],
+        failures: list[MotionPlannerError],
+    ) -> tuple[np.ndarray, int, int] | None:
+        """Track one sampled approach and verify it: (trajectory, grasp, release) or None.
+
+        A failure is appended to ``failures``; PlanningTimeout propagates.
+        """
+        try:
+            trajectory, grasp_index, release_index = self._track(
+                path, scene, obj, deadline, timings
+            )
+        except PlanningTimeout:
+            raise
+        except MotionPlannerError as err:
+            failures.append(err)
+            return None
+        t0 = time.perf_counter()
+        report = self.verifier.verify(
+            trajectory, standing, Carried(obj, grasp_index, release_index)
+        )
+        timings['verify'] += time.perf_counter() - t0
+        if not report.ok:
+            carried = any('carried' in (v.name_a, v.name_b) for v in report.violations)
+            failures.append(
+                VerificationFailed(f'yaw {path.approach_yaw:.2f} rad: {report.summary()}', carried)
+            )
+            return None
+        return trajectory, grasp_index, release_index
 
     def _sample(
         self,

@@ -20,6 +20,8 @@ Every trajectory still passes the planner's independent verifier before it is re
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 import numpy as np
 import pinocchio as pin
@@ -34,7 +36,27 @@ SEED_RESOLUTION = 1e4  # target pose quantum of the restart generator's seed [1/
 
 
 class RobustStpik(Stpik):
-    """:class:`~.stpik.Stpik` with random IK restarts and RRTConnect transits."""
+    """:class:`~.stpik.Stpik` with random IK restarts and RRTConnect transits.
+
+    Attributes:
+        fallbacks: whether the fallbacks run (off inside :meth:`plain`).
+    """
+
+    fallbacks = True
+
+    @property
+    def has_fallbacks(self) -> bool:
+        """Whether the config enables any fallback (restarts > 0 or an RRT budget)."""
+        return self.config.ik_restarts > 0 or self.config.rrt_transit_s > 0.0
+
+    @contextmanager
+    def plain(self) -> Iterator[None]:
+        """Within the block: the plain STPIK, no fallback (the planner's first pass)."""
+        self.fallbacks = False
+        try:
+            yield
+        finally:
+            self.fallbacks = True
 
     def converge(self, seed, target, scene, iterations=40, deadline=np.inf):
         """:meth:`Stpik.converge` from ``seed``, then from ``config.ik_restarts`` random seeds.
@@ -47,6 +69,8 @@ class RobustStpik(Stpik):
         except PlanningTimeout:
             raise
         except MotionPlannerError as err:
+            if not self.fallbacks:
+                raise
             first = err
         rng = np.random.default_rng(_pose_seed(self.config.seed, target))
         low, high = np.maximum(self.lower, -math.pi), np.minimum(self.upper, math.pi * 2)
@@ -68,7 +92,7 @@ class RobustStpik(Stpik):
         except PlanningTimeout:
             raise
         except MotionPlannerError as err:
-            if self.config.rrt_transit_s <= 0.0:
+            if not self.fallbacks or self.config.rrt_transit_s <= 0.0:
                 raise
             path = self.rrt(np.asarray(q_a, dtype=float), np.asarray(q_b, dtype=float), scene)
             if path is None:
