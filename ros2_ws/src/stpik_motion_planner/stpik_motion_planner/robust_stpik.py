@@ -7,9 +7,10 @@ questions on generated clutter, 30 such answers the reference planner solved, 23
 these two fallbacks (``benchmarks/results/false_infeasible.md``). No ROS import.
 
 * :meth:`RobustStpik.converge`: after a failed solve from the planner's seed, up to
-  ``config.ik_restarts`` seeds drawn uniformly in the joint ranges (±π on continuous joints),
-  from a generator seeded by ``config.seed`` and the target pose, so that the same question
-  gets the same seeds whatever was asked before (answers are cached by set, Assumption 2).
+  ``config.ik_restarts`` seeds drawn uniformly in the joint ranges ([−π, 2π] on continuous
+  joints), from a generator seeded by ``config.seed`` and the target pose, so that the same
+  question gets the same seeds whatever was asked before (answers are cached by set,
+  Assumption 2).
 * :meth:`RobustStpik.transit`: when the straight joint move collides, joint-space OMPL
   RRTConnect for ``config.rrt_transit_s`` seconds (validity: joint limits, the self-hit and scene
   safety margins; 0 turns it off), resampled to at most ``step_rad`` per joint per sample.
@@ -30,7 +31,7 @@ from ompl import geometric as og
 
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.exceptions import MotionPlannerError, PlanningTimeout
-from stpik_motion_planner.stpik import Stpik
+from stpik_motion_planner.stpik import Stpik, joint_segment
 
 SEED_RESOLUTION = 1e4  # target pose quantum of the restart generator's seed [1/m] [-]
 
@@ -149,8 +150,7 @@ class RobustStpik(Stpik):
         ]
         out = [states[0]]
         for s in states[1:]:  # samples ≤ step_rad apart, as the straight transit gives
-            n = max(1, math.ceil(float(np.max(np.abs(s - out[-1]))) / self.config.step_rad))
-            out += [out[-1] + (s - out[-1]) * t for t in np.arange(1, n + 1) / n]
+            out += list(joint_segment(out[-1], s, self.config.step_rad))
         return np.array(out[1:])
 
 

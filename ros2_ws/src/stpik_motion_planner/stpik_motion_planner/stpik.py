@@ -466,8 +466,7 @@ class Stpik:
             SelfCollision, SceneCollision, PlanningTimeout.
         """
         c = self.config
-        n = max(1, math.ceil(float(np.max(np.abs(q_b - q_a))) / c.step_rad))
-        out = np.array([q_a + (q_b - q_a) * t for t in np.arange(1, n + 1) / n])
+        out = joint_segment(q_a, q_b, c.step_rad)
         for q in out:
             if time.perf_counter() > deadline:
                 raise PlanningTimeout.past(deadline, c.time_limit_s)
@@ -532,6 +531,13 @@ class Stpik:
             float(np.linalg.norm(error[3:])),
             '; '.join(held),
         )
+
+
+def joint_segment(q_a: np.ndarray, q_b: np.ndarray, step_rad: float) -> np.ndarray:
+    """Straight joint-space samples after ``q_a`` up to ``q_b`` [rad], shape (n, 7), at most
+    ``step_rad`` [rad] apart on every joint."""
+    n = max(1, math.ceil(float(np.max(np.abs(q_b - q_a))) / step_rad))
+    return np.array([q_a + (q_b - q_a) * t for t in np.arange(1, n + 1) / n])
 
 
 def _bounding_radius(geometry: object) -> float:
