@@ -65,6 +65,11 @@ class ScaleTask:
     search_time_s: float = 120.0
 
 
+def clear_key(relocated: tuple[str, ...], object_id: str) -> SetKey:
+    """Cache key of a verification query, apart from the ordinary answer's key."""
+    return frozenset(relocated) | {CLEAR_ZONE}, object_id
+
+
 class BudgetHitError(OracleUnavailableError):
     """A method used up its planner-run or wall-time budget (raised by :class:`MethodOracle`)."""
 
@@ -95,15 +100,16 @@ class SceneOracle:
         """Whether the real oracle answers verification queries apart (the planner does)."""
         return hasattr(self.inner, 'clear_zone_feasible')
 
-    def clear_zone(self, relocated: tuple[str, ...], object_id: str) -> tuple[SetKey, bool]:
-        """(key, answer) of a verification query (:func:`~.oracle.ask_clear`), cached, timed."""
-        key = (frozenset(relocated) | {CLEAR_ZONE}, object_id)
+    def clear_zone(self, relocated: tuple[str, ...], object_id: str) -> bool:
+        """Answer of a verification query (:func:`~.oracle.ask_clear`), cached under
+        :func:`clear_key`, timed."""
+        key = clear_key(relocated, object_id)
         if key not in self.cleared:
             start = time.perf_counter()
             self.cleared[key] = ask_clear(self.inner, tuple(relocated), object_id)
             self.cost_s[key] = time.perf_counter() - start
             self.spent_s += self.cost_s[key]
-        return key, self.cleared[key]
+        return self.cleared[key]
 
     def answer(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
         """Cached answer, or one real run (timed)."""
@@ -157,16 +163,17 @@ class MethodOracle:
         """Verification query; the ordinary answer when the real oracle has none apart."""
         if not self.scene.has_clear_zone:
             return self.feasible(relocated, object_id)
-        key = (frozenset(relocated) | {CLEAR_ZONE}, object_id)
+        key = clear_key(relocated, object_id)
         if key not in self._seen:
             if self.planner_runs >= self.max_runs:
                 raise BudgetHitError('planner_runs')
             if time.monotonic() > self.deadline:
                 raise BudgetHitError('time')
-            self.scene.clear_zone(relocated, object_id)
+            answer = self.scene.clear_zone(relocated, object_id)
             self._seen.add(key)
             self.planner_runs += 1
             self.charged_s += self.scene.cost_s[key]
+            return answer
         return self.scene.cleared[key]
 
 
