@@ -1,30 +1,46 @@
 """Seeded random cluttered scenes of household-sized objects for scaling studies (no ROS).
 
 Objects (cylinders, and boxes with probability ``box_share``) are placed by random sequential
-addition, largest first, in a rectangle in front of the robot: x ≥ ``x_min``, centred on y = 0,
-width = ``ASPECT`` × depth. The rectangle's area is set by ``density`` = total footprint area /
-region area (:func:`region_size`; a scene of at most ``SMALL_SCENE`` objects gets at least room for
-them, hence may have a lower density). The target ``'T'`` is drawn among the objects inside the
-arm's side-grasp workspace (:func:`in_side_grasp_workspace`) that the open hand can close on (at
-most ``HAND_OPENING_M`` across; the first object drawn always is) and that stand among the clutter:
-some object is nearer the base within the target's approach corridor and some object is farther
-from the base (never simply the farthest object). The obstacles are ``'O1'``… in order of
-increasing distance from the base. The same arguments always give the same scene.
+addition in a rectangle in front of the robot: x ≥ ``x_min``, centred on y = 0, width =
+``ASPECT`` × depth. The rectangle's area is set by ``density`` = total footprint area / region
+area (:func:`region_size`; a scene of at most ``SMALL_SCENE`` objects gets at least room for them,
+hence may have a lower density). The obstacles are ``'O1'``… in order of increasing distance from
+the base. The same arguments always give the same scene.
 
-Whether the target can actually be retrieved is checked with the motion planner outside this
-package (``qtree_task_planner.clutter.generate_retrievable``).
+Two layouts:
+
+* ``'accessible'`` (default): the target ``'T'`` (a shape the open hand closes on, at most
+  ``HAND_OPENING_M`` across) is placed first, inside the side-grasp workspace; then the others,
+  largest first, each only where the scene stays clearable for the 2-D swept hand of
+  :mod:`qtree_scene.hand_access` (see :func:`_accessible_layout`): removing the objects placed
+  with a free approach, in the reverse order of placement, leaves every one of them, and last the
+  target, an approach free of what still stands. Layouts are redrawn (at most
+  ``LAYOUT_RESTARTS``, then the last one is kept) until the target stands among the clutter: some
+  object nearer the base in its approach corridor, some farther from the base, and every one of
+  the planner's approaches blocked in the 2-D model, hence for the planner too (the target is
+  not graspable before something is moved).
+* ``'uniform'``: plain random sequential addition, largest first, the target then drawn among the
+  graspable objects in the workspace, preferably among the clutter. Most dense scenes of this
+  layout are not retrievable (``benchmarks/results/clutter_solvable.md``).
+
+Whether the target can actually be retrieved by the motion planner is checked outside this
+package (``qtree_task_planner.clutter.generate_retrievable``); the 2-D model is a necessary
+condition for the planner's corridor test, not a sufficient one (IK, joint limits, arm links).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from jaco2_description.model import HAND_OPENING_M, HOME
 
 from qtree_scene.exceptions import ScenarioError
 from qtree_scene.footprint import Footprint, overlap
+from qtree_scene.hand_access import blocked_yaws, bound, free_yaws
 from qtree_scene.placement import DROP_TABLE_REACH_M
 from qtree_scene.scenario import TABLE_ID, validate_scenario
 from qtree_scene.scene import ObjectSpec, Scenario
@@ -47,6 +63,18 @@ RADIUS_LIMITS = (0.01, 0.08)  # accepted radius_range bounds [m]
 HEIGHT_LIMITS = (0.03, 0.4)  # accepted height_range bounds [m]
 SMALL_SCENE = 3  # scenes of at most this many objects get room for them at any density [-]
 LAYOUT_RESTARTS = 8  # fresh layouts tried before the density is declared impossible [-]
+# Approaches the accessible layout counts on: the radial one and ±0.4, ±0.8 rad. The planner
+# tries ±1.2 and ±1.6 rad too, but on generated scenes those fail IK or a joint limit too often
+# (and the transit from home passes over the neighbours) to be relied on.
+CLEARING_APPROACHES = 5
+# Objects nearer the base than this are not counted on by the accessible layout: the planner
+# often fails them (link 3 meets the table, the transit from home sweeps the neighbours) [m].
+CARRY_MIN_REACH_M = 0.45
+# Near edge of the clutter region per layout [m]: the accessible layout starts where objects
+# can be carried away (CARRY_MIN_REACH_M, minus a small object's radius).
+X_MIN_M = {'accessible': 0.42, 'uniform': 0.35}
+Layout = Literal['accessible', 'uniform']
+LAYOUTS: tuple[str, ...] = ('accessible', 'uniform')
 
 
 @dataclass(frozen=True)
@@ -157,6 +185,31 @@ def _draw_shapes(
     return shapes
 
 
+def _candidate(
+    rng: np.random.Generator, s: _Shape, depth: float, width: float, x_min: float
+) -> Footprint:
+    """One random pose of shape ``s`` inside the clutter rectangle."""
+    b = s.bound
+    centre = (
+        float(rng.uniform(x_min + b, x_min + depth - b)),
+        float(rng.uniform(-width / 2 + b, width / 2 - b)),
+    )
+    if s.box:
+        yaw = float(rng.uniform(-math.pi / 2, math.pi / 2))
+        return Footprint(centre, yaw=yaw, half_size=(s.sx / 2, s.sy / 2))
+    return Footprint(centre, radius=s.radius)
+
+
+def _overlaps_any(fp: Footprint, placed: Iterable[Footprint], gap: float) -> bool:
+    # Cheap bounding test first; 2·gap because overlap() grows rectangles by gap per axis, up
+    # to gap·√2 at their corners (two boxes corner to corner were never compared).
+    b = bound(fp)
+    return any(
+        math.dist(f.center, fp.center) <= b + bound(f) + 2 * gap and overlap(fp, f, gap)
+        for f in placed
+    )
+
+
 def _layout(
     rng: np.random.Generator,
     shapes: list[_Shape],
@@ -169,29 +222,11 @@ def _layout(
     """Random sequential addition, largest footprint first; None when an object does not fit."""
     placed: dict[int, Footprint] = {}
     for k in sorted(range(len(shapes)), key=lambda i: -shapes[i].area):
-        s = shapes[k]
-        b = s.bound
-        if 2 * b > min(depth, width):
+        if 2 * shapes[k].bound > min(depth, width):
             return None
         for _ in range(attempts):
-            centre = (
-                float(rng.uniform(x_min + b, x_min + depth - b)),
-                float(rng.uniform(-width / 2 + b, width / 2 - b)),
-            )
-            yaw = float(rng.uniform(-math.pi / 2, math.pi / 2)) if s.box else 0.0
-            fp = (
-                Footprint(centre, yaw=yaw, half_size=(s.sx / 2, s.sy / 2))
-                if s.box
-                else Footprint(centre, radius=s.radius)
-            )
-            near = (
-                f
-                for f in placed.values()
-                # Cheap bounding test; 2·gap because overlap() grows rectangles by gap per axis,
-                # up to gap·√2 at their corners (two boxes corner to corner were never compared).
-                if math.dist(f.center, centre) <= b + _bound(f) + 2 * gap
-            )
-            if not any(overlap(fp, f, gap) for f in near):
+            fp = _candidate(rng, shapes[k], depth, width, x_min)
+            if not _overlaps_any(fp, placed.values(), gap):
                 placed[k] = fp
                 break
         else:
@@ -199,8 +234,60 @@ def _layout(
     return [placed[k] for k in range(len(shapes))]
 
 
-def _bound(fp: Footprint) -> float:
-    return fp.radius if fp.is_circle else math.hypot(*fp.half_size)
+def movable(shape: _Shape, center: tuple[float, float]) -> bool:
+    """Whether the accessible layout counts on carrying the object away: the hand closes on it
+    and it stands in the side-grasp workspace, farther than ``CARRY_MIN_REACH_M``."""
+    return (
+        shape.grasp_width <= HAND_OPENING_M
+        and in_side_grasp_workspace(center)
+        and math.hypot(*center) >= CARRY_MIN_REACH_M
+    )
+
+
+def _accessible_layout(
+    rng: np.random.Generator,
+    shapes: list[_Shape],
+    depth: float,
+    width: float,
+    x_min: float,
+    gap: float,
+    attempts: int,
+) -> list[Footprint] | None:
+    """Random sequential addition that keeps the scene clearable by side grasps, or None.
+
+    Shape 0 (the target) is placed first, inside the side-grasp workspace, then the others
+    largest first. A movable object (:func:`movable`) is accepted only where some approach of the
+    hand is free of everything placed before it (:func:`~qtree_scene.hand_access.free_yaws`);
+    an immovable one only where every movable object placed before keeps a free approach. So
+    removing the movable objects in the reverse order of placement always finds a free approach
+    for each, and last for the target: the scene is retrievable for the 2-D hand model.
+    """
+    order = [0, *sorted(range(1, len(shapes)), key=lambda i: -shapes[i].area)]
+    placed: dict[int, Footprint] = {}
+    free: dict[int, set[float]] = {}  # movable -> approaches free when it is removed [rad]
+    for k in order:
+        if 2 * shapes[k].bound > min(depth, width):
+            return None
+        for _ in range(attempts):
+            fp = _candidate(rng, shapes[k], depth, width, x_min)
+            if k == 0 and not movable(shapes[0], fp.center):
+                continue
+            if _overlaps_any(fp, placed.values(), gap):
+                continue
+            if movable(shapes[k], fp.center):
+                yaws = free_yaws(fp.center, placed.values(), CLEARING_APPROACHES)
+                if yaws:
+                    free[k] = set(yaws)
+                    break
+            hits = {p: blocked_yaws(placed[p].center, y, fp) for p, y in free.items()}
+            if all(free[p] - hits[p] for p in free):
+                for p in free:
+                    free[p] -= hits[p]
+                break
+        else:
+            return None
+        placed[k] = fp
+    return [placed[k] for k in range(len(shapes))]
 
 
 def _in_clutter(k: int, footprints: list[Footprint], shapes: list[_Shape]) -> bool:
@@ -250,8 +337,9 @@ def generate_clutter(
     height_range: tuple[float, float] = (0.08, 0.25),
     box_share: float = 0.3,
     gap: float = 0.01,
-    x_min: float = 0.35,
+    x_min: float | None = None,
     attempts: int = 3000,
+    layout: Layout = 'accessible',
 ) -> Scenario:
     """Random non-overlapping household-sized objects in front of the robot, seeded.
 
@@ -263,9 +351,17 @@ def generate_clutter(
         height_range: object heights are uniform in this range [m].
         box_share: probability that an object is a box (random yaw) instead of a cylinder [-].
         gap: minimum free distance between two footprints [m], > 0.
-        x_min: near edge of the region [m] (clear of the robot keep-out disc).
+        x_min: near edge of the region [m] (clear of the robot keep-out disc); default
+            ``X_MIN_M[layout]``.
         attempts: placement tries per object and layout; at most ``LAYOUT_RESTARTS`` layouts
             are tried, so the generator always terminates.
+        layout: ``'accessible'``: every object the arm can carry away is placed only where a
+            side-grasp approach stays free of the objects placed before it, and every other
+            object only where it leaves each of those a free approach, so that removing them in
+            the reverse order clears the target for the 2-D hand model of
+            :mod:`qtree_scene.hand_access` (the target is placed first, in the workspace).
+            ``'uniform'``: plain random sequential addition, the target drawn afterwards (the
+            generator before issue #14's solvability work; many scenes are not retrievable).
 
     Returns:
         A validated scenario named ``gen_<n>_<density>_<seed>``.
@@ -276,6 +372,13 @@ def generate_clutter(
             side-grasp workspace (field ``'density'``).
     """
     _check_arguments(n_objects, density, radius_range, height_range, box_share, gap)
+    if layout not in LAYOUTS:
+        raise ScenarioError(
+            'generate_clutter', 'layout', f'must be one of {LAYOUTS}, got {layout!r}'
+        )
+    x_min = X_MIN_M[layout] if x_min is None else x_min
+    if not (isinstance(x_min, (int, float)) and math.isfinite(x_min) and 0.0 < x_min <= 1.0):
+        raise ScenarioError('generate_clutter', 'x_min', f'must be in (0, 1] m, got {x_min!r}')
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ScenarioError('generate_clutter', 'seed', f'must be an int ≥ 0, got {seed!r}')
     rng = np.random.default_rng(int(seed))
@@ -286,12 +389,20 @@ def generate_clutter(
     if n <= SMALL_SCENE and depth < smallest:  # room for a tiny scene's objects
         depth, width = smallest, ASPECT * smallest
     footprints, target = None, None
-    for _ in range(LAYOUT_RESTARTS):
-        footprints = _layout(rng, shapes, depth, width, x_min, gap, attempts)
-        if footprints is not None:
-            target = _pick_target(rng, footprints, shapes)
-            if target is not None:
-                break
+    if layout == 'accessible':
+        for _ in range(LAYOUT_RESTARTS):
+            found = _accessible_layout(rng, shapes, depth, width, x_min, gap, attempts)
+            if found is not None:
+                footprints, target = found, 0
+                if _in_clutter(0, found, shapes) and not free_yaws(found[0].center, found[1:]):
+                    break  # blocked for every approach of the planner: not graspable untouched
+    else:
+        for _ in range(LAYOUT_RESTARTS):
+            footprints = _layout(rng, shapes, depth, width, x_min, gap, attempts)
+            if footprints is not None:
+                target = _pick_target(rng, footprints, shapes)
+                if target is not None:
+                    break
     if footprints is None:
         problem = f'cannot pack {n} objects at density {density} in {LAYOUT_RESTARTS} tries'
         raise ScenarioError('generate_clutter', 'density', problem + '; lower it')

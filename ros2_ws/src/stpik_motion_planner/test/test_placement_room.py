@@ -1,7 +1,8 @@
 """Room for 30 relocations (#13 item 2): every drop slot of a 30-object scene is reachable.
 
-The object O6 of ``generate_clutter(30, 0.1, 4)`` (feasible in the untouched scene) is relocated
-after k = 0 … 29 others, so into slot k with slots 0 … k−1 standing as the occupied envelopes:
+The object O6 of ``generate_clutter(30, 0.1, 4, layout='uniform')`` (feasible in the untouched
+scene) is relocated after k = 0 … 29 others, so into slot k with slots 0 … k−1 standing as the
+occupied envelopes:
 every plan passes the planner's independent verifier (it returns no trajectory otherwise) and
 releases on its slot. Relocation 31 (the target after the 30 obstacles) is ``NO_PLACEMENT``.
 """
@@ -23,7 +24,7 @@ MOVER = 'O6'
 
 @pytest.fixture(scope='module')
 def planner(robot):
-    return MotionPlanner(generate_clutter(30, 0.1, 4), model=robot)
+    return MotionPlanner(generate_clutter(30, 0.1, 4, layout='uniform'), model=robot)
 
 
 def test_thirty_relocations_each_reach_their_own_slot(planner, robot):
