@@ -160,6 +160,7 @@ def main(argv: list[str] | None = None) -> int:
     records = [r for scene in per_scene for r in scene]
     meta = {
         'oracle': args.oracle,
+        'generator_layout': 'accessible',  # generate_clutter's default
         'scenes': args.scenes,
         'workers': args.workers,
         'exact_max_runs': args.exact_max_runs,

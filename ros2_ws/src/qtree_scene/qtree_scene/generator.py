@@ -63,10 +63,10 @@ RADIUS_LIMITS = (0.01, 0.08)  # accepted radius_range bounds [m]
 HEIGHT_LIMITS = (0.03, 0.4)  # accepted height_range bounds [m]
 SMALL_SCENE = 3  # scenes of at most this many objects get room for them at any density [-]
 LAYOUT_RESTARTS = 8  # fresh layouts tried before the density is declared impossible [-]
-# Approaches the accessible layout counts on: the radial one and ±0.4, ±0.8 rad. The planner
-# tries ±1.2 and ±1.6 rad too, but on generated scenes those fail IK or a joint limit too often
-# (and the transit from home passes over the neighbours) to be relied on.
-CLEARING_APPROACHES = 5
+# Approaches the accessible layout counts on: the radial one and every 0.2 rad up to ±0.8 rad.
+# The planner tries up to ±1.6 rad, but on generated scenes the wide side approaches fail IK or a
+# joint limit too often (and the transit from home passes over the neighbours) to be relied on.
+CLEARING_APPROACHES = 9
 # Objects nearer the base than this are not counted on by the accessible layout: the planner
 # often fails them (link 3 meets the table, the transit from home sweeps the neighbours) [m].
 CARRY_MIN_REACH_M = 0.45

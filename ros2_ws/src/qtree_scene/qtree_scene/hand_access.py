@@ -24,8 +24,8 @@ from collections.abc import Iterable, Sequence
 
 from qtree_scene.footprint import Footprint, overlap
 
-YAW_STEP_RAD = 0.4  # stpik_motion_planner PlannerConfig.approach_yaw_step_rad [rad]
-APPROACH_DIRECTIONS = 9  # PlannerConfig.approach_directions [-]
+YAW_STEP_RAD = 0.2  # stpik_motion_planner PlannerConfig.approach_yaw_step_rad [rad]
+APPROACH_DIRECTIONS = 17  # PlannerConfig.approach_directions [-]
 STANDOFF_M = 0.1  # PlannerConfig.pregrasp_standoff_m [m]
 MARGIN_M = 0.01  # growth of the hand rectangles [m] (planner failure distance 5 mm + slack)
 # (half width across the approach, rear end, front end) of each swept hand part, before the

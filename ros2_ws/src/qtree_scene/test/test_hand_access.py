@@ -21,7 +21,7 @@ TARGET = (0.55, 0.0)  # on the x axis: the radial approach has yaw 0 [m]
 def test_yaws_start_radial_then_alternate() -> None:
     yaws = approach_yaws((0.5, 0.5))
     assert len(yaws) == APPROACH_DIRECTIONS
-    assert yaws[:3] == pytest.approx([math.pi / 4, math.pi / 4 + 0.4, math.pi / 4 - 0.4])
+    assert yaws[:3] == pytest.approx([math.pi / 4, math.pi / 4 + 0.2, math.pi / 4 - 0.2])
     assert max(yaws) - min(yaws) == pytest.approx(3.2)
 
 

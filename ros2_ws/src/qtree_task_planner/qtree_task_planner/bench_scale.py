@@ -324,7 +324,8 @@ def markdown(rows: list[dict], meta: dict) -> str:
     lines = [
         '# Scale benchmark (issue #14)',
         '',
-        f'Oracle: {meta["oracle"]}; {meta["scenes"]} scenes per (N, density); '
+        f'Oracle: {meta["oracle"]}; generator layout '
+        f'`{meta.get("generator_layout", "uniform")}`; {meta["scenes"]} scenes per (N, density); '
         f'{meta["workers"]} worker(s); total wall time {meta["wall_time_s"]:.0f} s. '
         f'Budgets: exact {meta["exact_max_runs"]} planner runs / {meta["exact_time_s"]:g} s, '
         f'learners Ep_max {meta["learner_episodes"]} / {meta["learner_time_s"]:g} s, '

@@ -144,7 +144,10 @@ class BlockerFinder:
         full = SceneWorld(movable)
         out = []
         centre = np.asarray(obj.position, dtype=float)
-        for yaw in approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad):
+        # Every other approach of the planner (twice its step): blocker reports are a heuristic,
+        # one sweep per object and yaw is their whole cost.
+        count, step = (c.approach_directions + 1) // 2, 2 * c.approach_yaw_step_rad
+        for yaw in approach_yaws(centre, count, step):
             result = planner.plan(object_id, others, yaws=[yaw], slot_index=0)
             if not result.feasible:
                 out.append(Sweep(yaw, False, {}))

@@ -3,8 +3,8 @@
 Used by ``scripts/bench_false_infeasible.py`` to measure how often the real planner answers
 "infeasible" where a motion exists (no ROS import). Never used to answer requests.
 
-:class:`ReferencePlanner` is the motion planner with an exhaustive search: 17 approach yaws every
-0.2 rad (±1.6 rad around the object's azimuth) instead of 9 every 0.4 rad, two more STPIK
+:class:`ReferencePlanner` is the motion planner with an exhaustive search: 33 approach yaws every
+0.1 rad (±1.6 rad around the object's azimuth) instead of 17 every 0.2 rad, two more STPIK
 iterations per path sample, 12 random IK restarts instead of 5 on every failed IK solve, 2 s
 instead of 1 s of joint-space RRTConnect wherever a straight joint transit collides
 (:mod:`.robust_stpik`), and a 60 s time limit.
@@ -33,8 +33,8 @@ from stpik_motion_planner.result import PlanResult
 
 VERIFY_STEP_RAD = 0.01  # largest joint change between two verified configurations [rad]
 REFERENCE_CONFIG = {
-    'approach_directions': 17,
-    'approach_yaw_step_rad': 0.2,
+    'approach_directions': 33,
+    'approach_yaw_step_rad': 0.1,
     'max_iterations': 14,
     'ik_restarts': 12,
     'rrt_transit_s': 2.0,

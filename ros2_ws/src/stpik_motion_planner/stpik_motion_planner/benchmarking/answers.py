@@ -39,10 +39,11 @@ MAX_SETS = 400  # exact-search budget on the generated scenes [-]
 
 def load(name: str) -> Scenario:
     """An installed scenario (``'s1'``) or a generated one, ``'gen_<objects>_<density>_<seed>'``
-    (:func:`qtree_scene.generator.generate_clutter`, as in the benchmark)."""
+    (:func:`qtree_scene.generator.generate_clutter`, ``layout='uniform'``: the scenes the
+    committed answer keys were taken on, fixed so that planner changes stay comparable)."""
     if name.startswith('gen_'):
         _, objects, density, seed = name.split('_')
-        return generate_clutter(int(objects), float(density), int(seed))
+        return generate_clutter(int(objects), float(density), int(seed), layout='uniform')
     return load_scenario(name)
 
 
