@@ -61,13 +61,15 @@ def write(rows: list[dict], meta: dict, out: Path) -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(result, indent=1) + '\n')
     verdict = 'met' if share >= TARGET else f'missed by {TARGET - share:.0%}'
+    untouched = sum(r['sequence'] == ['T'] for r in rows)
     md = [
         '# Generated clutter: retrievable before filtering',
         '',
         f'{len(rows)} scenes ({meta["status"]}, {meta["wall_s"]:.0f} s wall, shared machine), '
         f'layout `{meta["layout"]}`, check `{meta["method"]}` with the in-process planner '
         '(time limit 30 s per check). '
-        f'**Solvable share {share:.0%}** (target ≥ 90 %: {verdict}); budget hits are excluded.',
+        f'**Solvable share {share:.0%}** (target ≥ 90 %: {verdict}); budget hits are excluded. '
+        f'Target graspable in the untouched scene: {untouched} of {len(rows)}.',
         '',
         '| N obstacles | density | retrievable | budget hit | planner runs | wall [s] |',
         '|---|---|---|---|---|---|',

@@ -17,8 +17,9 @@ Two layouts:
   target, an approach free of what still stands. Layouts are redrawn (at most
   ``LAYOUT_RESTARTS``, then the last one is kept) until the target stands among the clutter: some
   object nearer the base in its approach corridor, some farther from the base, and every one of
-  the planner's approaches blocked in the 2-D model, hence for the planner too (the target is
-  not graspable before something is moved).
+  the planner's approaches blocked in the 2-D model. The model is the cautious side (margins,
+  heights ignored), so the planner may still grasp such a target untouched, e.g. over a short
+  neighbour; the benchmark counts how often.
 * ``'uniform'``: plain random sequential addition, largest first, the target then drawn among the
   graspable objects in the workspace, preferably among the clutter. Most dense scenes of this
   layout are not retrievable (``benchmarks/results/clutter_solvable.md``).
@@ -255,16 +256,18 @@ def _accessible_layout(
 ) -> list[Footprint] | None:
     """Random sequential addition that keeps the scene clearable by side grasps, or None.
 
-    Shape 0 (the target) is placed first, inside the side-grasp workspace, then the others
-    largest first. A movable object (:func:`movable`) is accepted only where some approach of the
-    hand is free of everything placed before it (:func:`~qtree_scene.hand_access.free_yaws`);
-    an immovable one only where every movable object placed before keeps a free approach. So
-    removing the movable objects in the reverse order of placement always finds a free approach
-    for each, and last for the target: the scene is retrievable for the 2-D hand model.
+    Shape 0 (the target) is placed first, inside the side-grasp workspace (where it is
+    :func:`movable`), then the others largest first. A movable object where one of the first
+    ``CLEARING_APPROACHES`` approaches is free of everything placed before it
+    (:func:`~qtree_scene.hand_access.free_yaws`) joins the objects counted on for removal, with
+    those approaches. Any other object (immovable, or no free approach) stays in the scene for
+    good, so it is accepted only where every object counted on keeps at least one of its
+    approaches. Removing the objects counted on in the reverse order of placement then always
+    finds a free approach for each, the target last: the scene is clearable for the 2-D model.
     """
     order = [0, *sorted(range(1, len(shapes)), key=lambda i: -shapes[i].area)]
     placed: dict[int, Footprint] = {}
-    free: dict[int, set[float]] = {}  # movable -> approaches free when it is removed [rad]
+    free: dict[int, set[float]] = {}  # counted on for removal -> its free approaches [rad]
     for k in order:
         if 2 * shapes[k].bound > min(depth, width):
             return None
@@ -395,7 +398,7 @@ def generate_clutter(
             if found is not None:
                 footprints, target = found, 0
                 if _in_clutter(0, found, shapes) and not free_yaws(found[0].center, found[1:]):
-                    break  # blocked for every approach of the planner: not graspable untouched
+                    break  # every planner approach blocked in the 2-D model
     else:
         for _ in range(LAYOUT_RESTARTS):
             footprints = _layout(rng, shapes, depth, width, x_min, gap, attempts)

@@ -99,9 +99,9 @@ def test_accessible_layout_is_clearable_by_the_2d_hand(scene) -> None:
 
 
 def test_target_is_blocked_for_every_planner_approach() -> None:
-    """The 2-D hand model contains the planner's hand (stpik_motion_planner's
-    test_hand_access_model), so a target blocked here is not graspable before a relocation.
-    A layout is redrawn at most LAYOUT_RESTARTS times, so a few sparse scenes keep a free one."""
+    """Every one of the planner's approaches to the target is blocked in the 2-D model (the
+    cautious side of the planner's corridor test). A layout is redrawn at most LAYOUT_RESTARTS
+    times, so a few sparse scenes keep a free one."""
     free = [
         (n, density, seed)
         for n, density in ((10, 0.15), (20, 0.3), (30, 0.15))
