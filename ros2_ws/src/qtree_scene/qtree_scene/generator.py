@@ -12,9 +12,9 @@ Two layouts:
 * ``'accessible'`` (default): the target ``'T'`` (a shape the open hand closes on, at most
   ``HAND_OPENING_M`` across) is placed first, inside the side-grasp workspace; then the others,
   largest first, each only where the scene stays clearable for the 2-D swept hand of
-  :mod:`qtree_scene.hand_access` (see :func:`_accessible_layout`): removing the objects placed
-  with a free approach, in the reverse order of placement, leaves every one of them, and last the
-  target, an approach free of what still stands. Layouts are redrawn (at most
+  :mod:`qtree_scene.hand_access` (:func:`qtree_scene.layouts.accessible_layout`): removing the
+  objects placed with a free approach, in the reverse order of placement, leaves every one of
+  them, and last the target, an approach free of what still stands. Layouts are redrawn (at most
   ``LAYOUT_RESTARTS``, then the last one is kept) until the target stands among the clutter: some
   object nearer the base in its approach corridor, some farther from the base, and every one of
   the planner's approaches blocked in the 2-D model. The model is the cautious side (margins,
@@ -32,16 +32,21 @@ condition for the planner's corridor test, not a sufficient one (IK, joint limit
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
-from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 from jaco2_description.model import HAND_OPENING_M, HOME
 
 from qtree_scene.exceptions import ScenarioError
-from qtree_scene.footprint import Footprint, overlap
-from qtree_scene.hand_access import blocked_yaws, bound, free_yaws
+from qtree_scene.footprint import Footprint
+from qtree_scene.hand_access import free_yaws
+from qtree_scene.layouts import (
+    Shape,
+    accessible_layout,
+    in_clutter,
+    pick_target,
+    uniform_layout,
+)
 from qtree_scene.placement import DROP_TABLE_REACH_M
 from qtree_scene.scenario import TABLE_ID, validate_scenario
 from qtree_scene.scene import ObjectSpec, Scenario
@@ -54,23 +59,10 @@ DROP_ZONE_SIZE = (0.3, 0.3, 0.3)  # [m]
 # slots of qtree_scene.placement (beside and behind the robot) have room for 30 relocations.
 TABLE_X_MIN = -DROP_TABLE_REACH_M
 TABLE_MARGIN = 0.1  # table border around the clutter region [m]
-# Side-grasp workspace of the Jaco² j2s7s300 for the target: horizontal distance of the object
-# axis from the base axis and its azimuth (isolated objects are graspable on x ∈ [0.3, 0.85] m,
-# |y| ≤ 0.45 m; these bounds keep a margin so that a cleared target is always in reach).
-WORKSPACE_REACH_M = (0.34, 0.72)  # [m]
-WORKSPACE_AZIMUTH_RAD = 0.75  # |atan2(y, x)| ≤ this [rad]
-CORRIDOR_HALF_WIDTH_M = 0.06  # half width of the hand's approach corridor toward the base [m]
 RADIUS_LIMITS = (0.01, 0.08)  # accepted radius_range bounds [m]
 HEIGHT_LIMITS = (0.03, 0.4)  # accepted height_range bounds [m]
 SMALL_SCENE = 3  # scenes of at most this many objects get room for them at any density [-]
 LAYOUT_RESTARTS = 8  # fresh layouts tried before the density is declared impossible [-]
-# Approaches the accessible layout counts on: the radial one and every 0.2 rad up to ±0.8 rad.
-# The planner tries up to ±1.6 rad, but on generated scenes the wide side approaches fail IK or a
-# joint limit too often (and the transit from home passes over the neighbours) to be relied on.
-CLEARING_APPROACHES = 9
-# Objects nearer the base than this are not counted on by the accessible layout: the planner
-# often fails them (link 3 meets the table, the transit from home sweeps the neighbours) [m].
-CARRY_MIN_REACH_M = 0.45
 # Near edge of the clutter region per layout [m]: the accessible layout starts where objects
 # can be carried away (CARRY_MIN_REACH_M, minus a small object's radius).
 X_MIN_M = {'accessible': 0.42, 'uniform': 0.35}
@@ -78,45 +70,11 @@ Layout = Literal['accessible', 'uniform']
 LAYOUTS: tuple[str, ...] = ('accessible', 'uniform')
 
 
-@dataclass(frozen=True)
-class _Shape:
-    """One drawn object before placement: a cylinder (radius) or a box (edges sx, sy), height."""
-
-    box: bool
-    radius: float
-    sx: float
-    sy: float
-    height: float
-
-    @property
-    def area(self) -> float:
-        """Footprint area [m²]."""
-        return self.sx * self.sy if self.box else math.pi * self.radius**2
-
-    @property
-    def grasp_width(self) -> float:
-        """Width the side-grasping hand closes on [m]: the diameter, or a box's narrower edge."""
-        return min(self.sx, self.sy)
-
-    @property
-    def bound(self) -> float:
-        """Radius of the footprint's bounding circle [m]."""
-        return math.hypot(self.sx, self.sy) / 2 if self.box else self.radius
-
-
 def region_size(footprint_area: float, density: float) -> tuple[float, float]:
     """Depth (x) and width (y) [m] of the clutter rectangle holding ``footprint_area`` [m²]."""
     area = footprint_area / density  # [m²]
     depth = math.sqrt(area / ASPECT)
     return depth, ASPECT * depth
-
-
-def in_side_grasp_workspace(position: tuple[float, ...]) -> bool:
-    """Whether an object centred at ``position`` (x, y[, z]) [m] is inside the target workspace."""
-    reach = math.hypot(position[0], position[1])
-    azimuth = abs(math.atan2(position[1], position[0]))
-    low, high = WORKSPACE_REACH_M
-    return low <= reach <= high and azimuth <= WORKSPACE_AZIMUTH_RAD
 
 
 def footprint_area(obj: ObjectSpec) -> float:
@@ -164,7 +122,7 @@ def _draw_shapes(
     radius_range: tuple[float, float],
     height_range: tuple[float, float],
     box_share: float,
-) -> list[_Shape]:
+) -> list[Shape]:
     """Cylinders of radius in ``radius_range``; boxes with edges in 2 × ``radius_range``.
 
     The first shape's half widths are clipped to ``HAND_OPENING_M`` / 2, so that every scene has
@@ -180,155 +138,10 @@ def _draw_shapes(
             sx, sy = 2 * sx, 2 * sy
         height = float(rng.uniform(*height_range))
         if box:
-            shapes.append(_Shape(True, 0.0, sx, sy, height))
+            shapes.append(Shape(True, 0.0, sx, sy, height))
         else:
-            shapes.append(_Shape(False, radius, 2 * radius, 2 * radius, height))
+            shapes.append(Shape(False, radius, 2 * radius, 2 * radius, height))
     return shapes
-
-
-def _candidate(
-    rng: np.random.Generator, s: _Shape, depth: float, width: float, x_min: float
-) -> Footprint:
-    """One random pose of shape ``s`` inside the clutter rectangle."""
-    b = s.bound
-    centre = (
-        float(rng.uniform(x_min + b, x_min + depth - b)),
-        float(rng.uniform(-width / 2 + b, width / 2 - b)),
-    )
-    if s.box:
-        yaw = float(rng.uniform(-math.pi / 2, math.pi / 2))
-        return Footprint(centre, yaw=yaw, half_size=(s.sx / 2, s.sy / 2))
-    return Footprint(centre, radius=s.radius)
-
-
-def _overlaps_any(fp: Footprint, placed: Iterable[Footprint], gap: float) -> bool:
-    # Cheap bounding test first; 2·gap because overlap() grows rectangles by gap per axis, up
-    # to gap·√2 at their corners (two boxes corner to corner were never compared).
-    b = bound(fp)
-    return any(
-        math.dist(f.center, fp.center) <= b + bound(f) + 2 * gap and overlap(fp, f, gap)
-        for f in placed
-    )
-
-
-def _layout(
-    rng: np.random.Generator,
-    shapes: list[_Shape],
-    depth: float,
-    width: float,
-    x_min: float,
-    gap: float,
-    attempts: int,
-) -> list[Footprint] | None:
-    """Random sequential addition, largest footprint first; None when an object does not fit."""
-    placed: dict[int, Footprint] = {}
-    for k in sorted(range(len(shapes)), key=lambda i: -shapes[i].area):
-        if 2 * shapes[k].bound > min(depth, width):
-            return None
-        for _ in range(attempts):
-            fp = _candidate(rng, shapes[k], depth, width, x_min)
-            if not _overlaps_any(fp, placed.values(), gap):
-                placed[k] = fp
-                break
-        else:
-            return None
-    return [placed[k] for k in range(len(shapes))]
-
-
-def movable(shape: _Shape, center: tuple[float, float]) -> bool:
-    """Whether the accessible layout counts on carrying the object away: the hand closes on it
-    and it stands in the side-grasp workspace, farther than ``CARRY_MIN_REACH_M``."""
-    return (
-        shape.grasp_width <= HAND_OPENING_M
-        and in_side_grasp_workspace(center)
-        and math.hypot(*center) >= CARRY_MIN_REACH_M
-    )
-
-
-def _accessible_layout(
-    rng: np.random.Generator,
-    shapes: list[_Shape],
-    depth: float,
-    width: float,
-    x_min: float,
-    gap: float,
-    attempts: int,
-) -> list[Footprint] | None:
-    """Random sequential addition that keeps the scene clearable by side grasps, or None.
-
-    Shape 0 (the target) is placed first, inside the side-grasp workspace (where it is
-    :func:`movable`), then the others largest first. A movable object where one of the first
-    ``CLEARING_APPROACHES`` approaches is free of everything placed before it
-    (:func:`~qtree_scene.hand_access.free_yaws`) joins the objects counted on for removal, with
-    those approaches. Any other object (immovable, or no free approach) stays in the scene for
-    good, so it is accepted only where every object counted on keeps at least one of its
-    approaches. Removing the objects counted on in the reverse order of placement then always
-    finds a free approach for each, the target last: the scene is clearable for the 2-D model.
-    """
-    order = [0, *sorted(range(1, len(shapes)), key=lambda i: -shapes[i].area)]
-    placed: dict[int, Footprint] = {}
-    free: dict[int, set[float]] = {}  # counted on for removal -> its free approaches [rad]
-    for k in order:
-        if 2 * shapes[k].bound > min(depth, width):
-            return None
-        for _ in range(attempts):
-            fp = _candidate(rng, shapes[k], depth, width, x_min)
-            if k == 0 and not movable(shapes[0], fp.center):
-                continue
-            if _overlaps_any(fp, placed.values(), gap):
-                continue
-            if movable(shapes[k], fp.center):
-                yaws = free_yaws(fp.center, placed.values(), CLEARING_APPROACHES)
-                if yaws:
-                    free[k] = set(yaws)
-                    break
-            hits = {p: blocked_yaws(placed[p].center, y, fp) for p, y in free.items()}
-            if all(free[p] - hits[p] for p in free):
-                for p in free:
-                    free[p] -= hits[p]
-                break
-        else:
-            return None
-        placed[k] = fp
-    return [placed[k] for k in range(len(shapes))]
-
-
-def _in_clutter(k: int, footprints: list[Footprint], shapes: list[_Shape]) -> bool:
-    """Object k has a neighbour nearer the base in its approach corridor and one farther away."""
-    c = np.asarray(footprints[k].center)
-    reach = float(np.linalg.norm(c))
-    axis = c / reach
-    blocked = farther = False
-    for i, fp in enumerate(footprints):
-        if i == k:
-            continue
-        d = np.asarray(fp.center)
-        along = float(d @ axis)
-        lateral = abs(float(d[0] * axis[1] - d[1] * axis[0]))
-        if along < reach and lateral < CORRIDOR_HALF_WIDTH_M + shapes[i].bound:
-            blocked = True
-        if float(np.linalg.norm(d)) > reach:
-            farther = True
-    return blocked and farther
-
-
-def _pick_target(
-    rng: np.random.Generator, footprints: list[Footprint], shapes: list[_Shape]
-) -> int | None:
-    """Index of the target: among the clutter if possible, always inside the workspace."""
-    inside = [
-        k
-        for k, fp in enumerate(footprints)
-        if in_side_grasp_workspace(fp.center) and shapes[k].grasp_width <= HAND_OPENING_M
-    ]
-    if not inside:
-        return None
-    if len(footprints) > 1:
-        far = max(range(len(footprints)), key=lambda k: math.hypot(*footprints[k].center))
-        inside = [k for k in inside if k != far] or inside
-    cluttered = [k for k in inside if _in_clutter(k, footprints, shapes)]
-    pool = cluttered or inside
-    return int(pool[int(rng.integers(len(pool)))])
 
 
 def generate_clutter(
@@ -394,16 +207,16 @@ def generate_clutter(
     footprints, target = None, None
     if layout == 'accessible':
         for _ in range(LAYOUT_RESTARTS):
-            found = _accessible_layout(rng, shapes, depth, width, x_min, gap, attempts)
+            found = accessible_layout(rng, shapes, depth, width, x_min, gap, attempts)
             if found is not None:
                 footprints, target = found, 0
-                if _in_clutter(0, found, shapes) and not free_yaws(found[0].center, found[1:]):
+                if in_clutter(0, found, shapes) and not free_yaws(found[0].center, found[1:]):
                     break  # every planner approach blocked in the 2-D model
     else:
         for _ in range(LAYOUT_RESTARTS):
-            footprints = _layout(rng, shapes, depth, width, x_min, gap, attempts)
+            footprints = uniform_layout(rng, shapes, depth, width, x_min, gap, attempts)
             if footprints is not None:
-                target = _pick_target(rng, footprints, shapes)
+                target = pick_target(rng, footprints, shapes)
                 if target is not None:
                     break
     if footprints is None:
@@ -421,7 +234,7 @@ def _assemble(
     n_objects: int,
     density: float,
     seed: int,
-    shapes: list[_Shape],
+    shapes: list[Shape],
     footprints: list[Footprint],
     target: int,
     depth: float,

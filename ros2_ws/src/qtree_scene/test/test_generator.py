@@ -10,16 +10,9 @@ from hypothesis import strategies as st
 from jaco2_description.model import HAND_OPENING_M
 from qtree_scene.exceptions import ScenarioError
 from qtree_scene.footprint import footprint_of, overlap
-from qtree_scene.generator import (
-    CARRY_MIN_REACH_M,
-    CLEARING_APPROACHES,
-    X_MIN_M,
-    footprint_area,
-    generate_clutter,
-    in_side_grasp_workspace,
-    region_size,
-)
+from qtree_scene.generator import X_MIN_M, footprint_area, generate_clutter, region_size
 from qtree_scene.hand_access import free_yaws
+from qtree_scene.layouts import CARRY_MIN_REACH_M, CLEARING_APPROACHES, in_side_grasp_workspace
 from qtree_scene.scene import ObjectSpec, Scenario
 
 
