@@ -6,7 +6,10 @@ fails there is blocked by something immovable (reach, joint limits, the table). 
 succeeds gives a whole motion (pre-grasp, grasp, lift, carry with the object attached, place,
 return); the arm and the carried object are swept densely along it and the distance of every
 movable object of the full scene to the sweep is kept. Both are cached per object: they do not
-depend on which objects are relocated.
+depend on which objects are relocated. The sweeps share the request's time limit: when it runs
+out before every approach was swept, the answer names the blockers of the approaches swept so far
+(never ``blocked_by_immovable``) and says so; the next request for that object goes on from the
+first approach not swept yet.
 
 For a request ``(relocated, object)`` the blockers of an approach are the objects, not yet
 relocated, closer than :data:`HIT_MARGIN_M` to its sweep. The answer is the approach with the
@@ -29,7 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from stpik_motion_planner.collision import SceneWorld
-from stpik_motion_planner.result import PlanResult
+from stpik_motion_planner.result import PlanResult, Reason
 
 if TYPE_CHECKING:
     from stpik_motion_planner.planner import MotionPlanner
@@ -67,11 +70,13 @@ class Blockers:
         ids: objects whose removal the planner believes necessary, nearest the base first.
         immovable: no approach works even with every movable object removed.
         yaw: yaw of the chosen approach [rad] (NaN when ``immovable``).
+        complete: every approach was swept (False: the time limit ran out first).
     """
 
     ids: tuple[str, ...]
     immovable: bool
     yaw: float = float('nan')
+    complete: bool = True
 
 
 class BlockerFinder:
@@ -85,38 +90,68 @@ class BlockerFinder:
     def __init__(self, planner: MotionPlanner) -> None:
         self.planner = planner
         self.sweeps: dict[str, list[Sweep]] = {}
+        self.partial: dict[str, list[Sweep]] = {}  # objects whose sweeps the deadline cut short
         self.time_s = 0.0
 
-    def find(self, object_id: str, relocated: Iterable[str]) -> Blockers:
-        """Blockers of relocating ``object_id`` once ``relocated`` are gone (valid request)."""
+    def find(
+        self, object_id: str, relocated: Iterable[str], deadline: float = math.inf
+    ) -> Blockers:
+        """Blockers of relocating ``object_id`` once ``relocated`` are gone (valid request).
+
+        Args:
+            object_id: the object to relocate.
+            relocated: the objects already relocated.
+            deadline: ``time.perf_counter()`` value by which to stop sweeping [s].
+        """
         done = frozenset(relocated)
-        sweeps = self._sweeps(object_id)
+        sweeps, complete = self._sweeps(object_id, deadline)
         working = [s for s in sweeps if s.works]
         if not working:
-            return Blockers((), True)
+            return Blockers((), complete, complete=complete)
         best = min(working, key=lambda s: len(s.blockers(done, HIT_MARGIN_M)))
         ids = best.blockers(done, HIT_MARGIN_M)
         if not ids:
             ids = best.blockers(done, NEAR_MARGIN_M)
         scenario = self.planner.scenario
         ids.sort(key=lambda i: (math.hypot(*scenario.object(i).position[:2]), i))
-        return Blockers(tuple(ids), False, best.yaw)
+        return Blockers(tuple(ids), False, best.yaw, complete)
 
-    def annotate(self, result: PlanResult, object_id: str, relocated: Iterable[str]) -> PlanResult:
-        """``result`` with its blockers when it is an infeasible planning answer (2xx)."""
+    def annotate(
+        self,
+        result: PlanResult,
+        object_id: str,
+        relocated: Iterable[str],
+        deadline: float = math.inf,
+    ) -> tuple[PlanResult, bool]:
+        """``result`` with its blockers when it is an infeasible planning answer (2xx).
+
+        Args:
+            result: the planner's answer.
+            object_id: the object it is about.
+            relocated: the objects already relocated.
+            deadline: ``time.perf_counter()`` value by which the sweeps stop [s].
+
+        Returns:
+            The annotated answer, and False when the deadline cut the sweeps short (its
+            blockers are those of the approaches swept so far: do not cache it).
+        """
         if result.feasible or not 200 <= int(result.reason) < 300:
-            return result
+            return result, True
         start = time.perf_counter()
-        found = self.find(object_id, relocated)
+        found = self.find(object_id, relocated, deadline)
         spent = time.perf_counter() - start
         timings = {**result.timings, 'blockers': spent}
-        if found.immovable:
+        if not found.complete:
+            named = ', '.join(found.ids[:5]) or 'none yet'
+            message = f'{result.message}; blockers (time limit hit, not every approach swept): '
+            message += named
+        elif found.immovable:
             message = f'{result.message}; blocked by nothing movable (no approach in reach)'
         elif found.ids:
             message = f'{result.message}; blockers: {", ".join(found.ids[:5])}'
         else:
             message = f'{result.message}; no blocker found'
-        return replace(
+        annotated = replace(
             result,
             message=message,
             blocking_ids=found.ids,
@@ -124,15 +159,21 @@ class BlockerFinder:
             planning_time=result.planning_time + spent,
             timings=timings,
         )
+        return annotated, found.complete
 
-    def _sweeps(self, object_id: str) -> list[Sweep]:
-        if object_id not in self.sweeps:
-            start = time.perf_counter()
-            self.sweeps[object_id] = self._compute(object_id)
-            self.time_s += time.perf_counter() - start
-        return self.sweeps[object_id]
+    def _sweeps(self, object_id: str, deadline: float) -> tuple[list[Sweep], bool]:
+        """The object's sweeps and whether every approach has been swept."""
+        if object_id in self.sweeps:
+            return self.sweeps[object_id], True
+        start = time.perf_counter()
+        sweeps = self.partial.pop(object_id, [])
+        complete = self._compute(object_id, sweeps, deadline)
+        self.time_s += time.perf_counter() - start
+        (self.sweeps if complete else self.partial)[object_id] = sweeps
+        return sweeps, complete
 
-    def _compute(self, object_id: str) -> list[Sweep]:
+    def _compute(self, object_id: str, out: list[Sweep], deadline: float) -> bool:
+        """Append the sweeps after the ``len(out)`` done to ``out``; False if cut short."""
         from stpik_motion_planner.cartesian_path import approach_yaws
 
         planner = self.planner
@@ -142,18 +183,21 @@ class BlockerFinder:
         movable = [o for o in scenario.objects if o.role != 'static' and o.id != object_id]
         others = [o.id for o in movable]
         full = SceneWorld(movable)
-        out = []
         centre = np.asarray(obj.position, dtype=float)
         # Every other approach of the planner (twice its step): blocker reports are a heuristic,
         # one sweep per object and yaw is their whole cost.
         count, step = (c.approach_directions + 1) // 2, 2 * c.approach_yaw_step_rad
-        for yaw in approach_yaws(centre, count, step):
-            result = planner.plan(object_id, others, yaws=[yaw], slot_index=0)
+        for yaw in approach_yaws(centre, count, step)[len(out) :]:
+            if time.perf_counter() >= deadline:
+                return False
+            result = planner.plan(object_id, others, yaws=[yaw], slot_index=0, deadline=deadline)
+            if result.reason == Reason.TIMEOUT and time.perf_counter() >= deadline:
+                return False  # cut by the request's deadline (its own limit: a failed approach)
             if not result.feasible:
                 out.append(Sweep(yaw, False, {}))
                 continue
             out.append(Sweep(yaw, True, self._distances(result, obj, full)))
-        return out
+        return True
 
     def _distances(self, result: PlanResult, obj, scene: SceneWorld) -> dict[str, float]:
         """Smallest distance of each movable object to the arm along ``result``'s motion [m]."""

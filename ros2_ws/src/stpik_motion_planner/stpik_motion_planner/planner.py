@@ -117,9 +117,11 @@ class MotionPlanner:
         answer = self.precheck(object_id, relocated)
         if answer is not None:
             return answer
+        deadline = time.perf_counter() + self.config.time_limit_s  # the whole answer's budget
         result = self.plan(object_id, relocated)
-        result = self.blockers.annotate(result, object_id, relocated)  # infeasible: who blocks
-        if result.reason != Reason.TIMEOUT:  # a timeout may pass on a quieter machine
+        result, complete = self.blockers.annotate(result, object_id, relocated, deadline)
+        # A timeout may pass on a quieter machine; blockers cut short go on at the next request.
+        if result.reason != Reason.TIMEOUT and complete:
             self.cache.put(object_id, relocated, result)
         return result
 
@@ -164,6 +166,7 @@ class MotionPlanner:
         relocated: list[str],
         yaws: Sequence[float] | None = None,
         slot_index: int | None = None,
+        deadline: float | None = None,
     ) -> PlanResult:
         """Plan without the cache (the request must be valid).
 
@@ -174,10 +177,12 @@ class MotionPlanner:
             slot_index: drop slot to place in with no placed objects standing (the blocker
                 sweeps of :mod:`.blockers`); default: slot ``len(relocated)`` with the occupied
                 slots 0 … len(relocated)−1 standing as envelopes.
+            deadline: ``time.perf_counter()`` value to stop at [s], if earlier than the time
+                limit (the blocker sweeps share their request's budget).
         """
         c = self.config
         start = time.perf_counter()
-        deadline = start + c.time_limit_s
+        deadline = min(start + c.time_limit_s, math.inf if deadline is None else deadline)
         timings = {'sampling': 0.0, 'stpik': 0.0, 'collision': 0.0, 'verify': 0.0}
         obj = self.scenario.object(object_id)
         index = len(relocated) if slot_index is None else slot_index

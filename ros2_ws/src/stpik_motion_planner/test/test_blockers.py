@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 from qtree_scene.scene import ObjectSpec, Scenario
+from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import Reason
 
@@ -47,7 +48,9 @@ def test_out_of_reach_is_blocked_by_nothing_movable(make_cylinder, robot):
     scene = _scene(
         make_cylinder('T', 1.3, 0.0, 'target'), make_cylinder('O1', 0.5, 0.0), table_x=1.5
     )
-    planner = MotionPlanner(scene, model=robot)
+    # Every approach must be swept within the request's limit to call it immovable: a 1.3 m
+    # reach fails slowly on all 17 approaches (about 3 s idle), so give it room on a loaded CI.
+    planner = MotionPlanner(scene, PlannerConfig(time_limit_s=60.0), model=robot)
     result = planner.check('T', [])
     assert not result.feasible
     assert result.blocked_by_immovable and result.blocking_ids == ()
@@ -60,3 +63,32 @@ def test_request_errors_carry_no_blockers(behind_one):
     result = behind_one.check('nope', [])
     assert result.reason == Reason.UNKNOWN_OBJECT
     assert result.blocking_ids == () and not result.blocked_by_immovable
+
+
+def test_blocker_sweeps_share_the_request_time_limit(make_cylinder, robot):
+    """Found on generate_clutter(200, 0.3, 0): an answer took 12 s of blocker sweeps with a 5 s
+    time limit. The sweeps now stop at the request's deadline, say so, and are not cached (nor is
+    the object called blocked by nothing movable)."""
+    import dataclasses
+
+    scene = _scene(
+        make_cylinder('T', 0.62, 0.0, 'target'),
+        make_cylinder('O1', 0.52, 0.0),
+        make_cylinder('O2', 0.45, -0.35),
+    )
+    limit = 0.3  # [s]: the corridor test answers in ~10 ms, the 9 sweeps take ~1 s
+    planner = MotionPlanner(scene, PlannerConfig(time_limit_s=limit), model=robot)
+    result = planner.check('T', [])
+    assert not result.feasible and not result.blocked_by_immovable
+    assert 'time limit hit' in result.message
+    # The sweep under way when the deadline passes finishes its arm sweep (≈ 1 s): the overrun
+    # is one sweep, not all nine.
+    assert result.planning_time < limit + 3.0
+    assert 'T' not in planner.blockers.sweeps and 'T' in planner.blockers.partial
+    assert planner.check('T', []).from_cache is False  # blockers cut short: not cached
+    swept = len(planner.blockers.partial.get('T', []))
+    planner.config = dataclasses.replace(planner.config, time_limit_s=30.0)
+    again = planner.check('T', [])  # goes on from the approaches already swept
+    assert again.blocking_ids == ('O1',) and 'time limit' not in again.message
+    assert len(planner.blockers.sweeps['T']) == 9 and swept < 9
+    assert planner.check('T', []).from_cache
