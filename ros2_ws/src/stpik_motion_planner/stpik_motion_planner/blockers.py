@@ -8,8 +8,8 @@ return); the arm and the carried object are swept densely along it and the dista
 movable object of the full scene to the sweep is kept. Both are cached per object: they do not
 depend on which objects are relocated. The sweeps share the request's time limit: when it runs
 out before every approach was swept, the answer names the blockers of the approaches swept so far
-(never ``blocked_by_immovable``) and says so; the next request for that object goes on from the
-first approach not swept yet.
+(never ``blocked_by_immovable``) and says so; the next uncached request about that object goes on
+from the first approach not swept yet.
 
 For a request ``(relocated, object)`` the blockers of an approach are the objects, not yet
 relocated, closer than :data:`HIT_MARGIN_M` to its sweep. The answer is the approach with the
@@ -133,7 +133,7 @@ class BlockerFinder:
 
         Returns:
             The annotated answer, and False when the deadline cut the sweeps short (its
-            blockers are those of the approaches swept so far: do not cache it).
+            blockers are those of the approaches swept so far).
         """
         if result.feasible or not 200 <= int(result.reason) < 300:
             return result, True

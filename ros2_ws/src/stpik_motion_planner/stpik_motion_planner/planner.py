@@ -119,9 +119,10 @@ class MotionPlanner:
             return answer
         deadline = time.perf_counter() + self.config.time_limit_s  # the whole answer's budget
         result = self.plan(object_id, relocated)
-        result, complete = self.blockers.annotate(result, object_id, relocated, deadline)
-        # A timeout may pass on a quieter machine; blockers cut short go on at the next request.
-        if result.reason != Reason.TIMEOUT and complete:
+        # Blockers cut short by the deadline stay in the cached answer (its feasibility is
+        # final); the sweeps go on at the next uncached request about the same object.
+        result, _ = self.blockers.annotate(result, object_id, relocated, deadline)
+        if result.reason != Reason.TIMEOUT:  # a timeout may pass on a quieter machine
             self.cache.put(object_id, relocated, result)
         return result
 

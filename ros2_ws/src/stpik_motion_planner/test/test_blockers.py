@@ -67,8 +67,8 @@ def test_request_errors_carry_no_blockers(behind_one):
 
 def test_blocker_sweeps_share_the_request_time_limit(make_cylinder, robot):
     """Found on generate_clutter(200, 0.3, 0): an answer took 12 s of blocker sweeps with a 5 s
-    time limit. The sweeps now stop at the request's deadline, say so, and are not cached (nor is
-    the object called blocked by nothing movable)."""
+    time limit. The sweeps now stop at the request's deadline and say so (the object is not
+    called blocked by nothing movable); the next request about the object goes on with them."""
     import dataclasses
 
     scene = _scene(
@@ -85,10 +85,9 @@ def test_blocker_sweeps_share_the_request_time_limit(make_cylinder, robot):
     # is one sweep, not all nine.
     assert result.planning_time < limit + 3.0
     assert 'T' not in planner.blockers.sweeps and 'T' in planner.blockers.partial
-    assert planner.check('T', []).from_cache is False  # blockers cut short: not cached
-    swept = len(planner.blockers.partial.get('T', []))
+    assert planner.check('T', []).from_cache  # the feasibility answer is final
+    swept = len(planner.blockers.partial['T'])
     planner.config = dataclasses.replace(planner.config, time_limit_s=30.0)
-    again = planner.check('T', [])  # goes on from the approaches already swept
+    again = planner.check('T', ['O2'])  # a new request about T goes on with the sweeps
     assert again.blocking_ids == ('O1',) and 'time limit' not in again.message
     assert len(planner.blockers.sweeps['T']) == 9 and swept < 9
-    assert planner.check('T', []).from_cache
