@@ -122,7 +122,7 @@ class BlockerFinder:
         object_id: str,
         relocated: Iterable[str],
         deadline: float = math.inf,
-    ) -> tuple[PlanResult, bool]:
+    ) -> PlanResult:
         """``result`` with its blockers when it is an infeasible planning answer (2xx).
 
         Args:
@@ -132,11 +132,11 @@ class BlockerFinder:
             deadline: ``time.perf_counter()`` value by which the sweeps stop [s].
 
         Returns:
-            The annotated answer, and False when the deadline cut the sweeps short (its
-            blockers are those of the approaches swept so far).
+            The annotated answer; when the deadline cut the sweeps short, its blockers are those
+            of the approaches swept so far and its message says so.
         """
         if result.feasible or not 200 <= int(result.reason) < 300:
-            return result, True
+            return result
         start = time.perf_counter()
         found = self.find(object_id, relocated, deadline)
         spent = time.perf_counter() - start
@@ -151,7 +151,7 @@ class BlockerFinder:
             message = f'{result.message}; blockers: {", ".join(found.ids[:5])}'
         else:
             message = f'{result.message}; no blocker found'
-        annotated = replace(
+        return replace(
             result,
             message=message,
             blocking_ids=found.ids,
@@ -159,7 +159,6 @@ class BlockerFinder:
             planning_time=result.planning_time + spent,
             timings=timings,
         )
-        return annotated, found.complete
 
     def _sweeps(self, object_id: str, deadline: float) -> tuple[list[Sweep], bool]:
         """The object's sweeps and whether every approach has been swept."""

@@ -121,7 +121,7 @@ class MotionPlanner:
         result = self.plan(object_id, relocated)
         # Blockers cut short by the deadline stay in the cached answer (its feasibility is
         # final); the sweeps go on at the next uncached request about the same object.
-        result, _ = self.blockers.annotate(result, object_id, relocated, deadline)
+        result = self.blockers.annotate(result, object_id, relocated, deadline)
         if result.reason != Reason.TIMEOUT:  # a timeout may pass on a quieter machine
             self.cache.put(object_id, relocated, result)
         return result

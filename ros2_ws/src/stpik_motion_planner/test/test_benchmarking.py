@@ -18,7 +18,7 @@ def test_placed_objects_stand_on_their_slots_in_order(boxed_scene):
 
 def test_feasible_answers_pass_in_every_order(boxed_scene, robot):
     planner = MotionPlanner(boxed_scene, model=robot)
-    planner.blockers.annotate = lambda result, *_: (result, True)
+    planner.blockers.annotate = lambda result, *_: result
     relocated = ['O0', 'O1', 'O2', 'O3', 'O4', 'O5']
     result = planner.check('T', relocated)
     assert result.feasible, result.message
