@@ -16,6 +16,7 @@ import pytest
 from orchestration import NodeProcess, allocate_domain_id, start_node, stop_all
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
+LOADED_EXECUTION_TIMEOUT_S = 240.0  # motion_planner_node's execution_timeout_s unless set [s]
 
 
 def probe_request(client: Any) -> Any:
@@ -75,6 +76,12 @@ def launch(ros_domain: int, tmp_path: Path) -> Iterator[Callable[..., NodeProces
 
     def _launch(package: str, executable: str, **kwargs: Any) -> NodeProcess:
         kwargs.setdefault('log_dir', tmp_path / 'logs')
+        if executable == 'motion_planner_node':
+            # Two test workers on 2 cores slow the closed loop's reference time (by design, the
+            # arm lags): segments then took longer than the node's default 30 s margin.
+            parameters = dict(kwargs.get('parameters') or {})
+            parameters.setdefault('execution_timeout_s', LOADED_EXECUTION_TIMEOUT_S)
+            kwargs['parameters'] = parameters
         node = start_node(package, executable, **kwargs)
         nodes.append(node)
         return node

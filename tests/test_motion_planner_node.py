@@ -21,9 +21,7 @@ def graph(launch, ros_node):
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
     sim = launch('jaco2_sim', 'sim_node', parameters={'scenario': 's1', 'sim_rate_hz': 100.0})
-    planner = launch(
-        'stpik_motion_planner', 'motion_planner_node', parameters={'execution_timeout_s': 20.0}
-    )
+    planner = launch('stpik_motion_planner', 'motion_planner_node')
     sim.wait_for_log('ready', 30.0)
     planner.wait_for_log('ready', 30.0)
     planner.wait_for_log('planner rebuilt', 30.0)

@@ -47,7 +47,7 @@ from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import RANGES, PlannerConfig
 from stpik_motion_planner.conversions import range_descriptor
 from stpik_motion_planner.exceptions import InvalidConfig
-from stpik_motion_planner.execution import TrajectoryExecution
+from stpik_motion_planner.execution import TrajectoryExecution, arm_speed
 from stpik_motion_planner.execution_config import (
     EXECUTION_RANGES,
     ExecutionConfig,
@@ -56,6 +56,7 @@ from stpik_motion_planner.execution_config import (
 )
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.scene_checks import format_id
+from stpik_motion_planner.state_watch import SilenceWatch
 
 SCENE_FRAME = 'j2s7s300_link_base'  # frame of the EE poses in TrackingState
 
@@ -88,7 +89,7 @@ class Execution(TrajectoryExecution):
         self._object_id = ''
         self._removed: set[str] = set()
         self._last_state_time = -math.inf  # /joint_states time of the last control step [s]
-        self._started = -math.inf
+        self._watch = SilenceWatch()  # /joint_states silence, not counting our own stalls
         self._stopped = ''
         self._state_error = ''
 
@@ -131,6 +132,7 @@ class Execution(TrajectoryExecution):
     def _on_joint_states(self, msg: JointState) -> None:
         try:
             self.q = measured_q(msg.name, msg.position)
+            self.speed = arm_speed(msg)
             self.state_time = time.monotonic()
         except ExecutionStopped as err:
             self._state_error = str(err)
@@ -161,7 +163,8 @@ class Execution(TrajectoryExecution):
                 self.robot, self._live_scene(), planner_config, config
             )
             self._scene_dirty = False
-            self._last_state_time, self._started = -math.inf, time.monotonic()
+            self._last_state_time = -math.inf
+            self._watch.start(time.monotonic())
         motion = PlannedMotion(result.times, result.joint_trajectory, self.robot)
         timer = node.create_timer(config.period, self._on_tick, callback_group=self._timer_group)
         try:
@@ -213,7 +216,7 @@ class Execution(TrajectoryExecution):
             if controller is None or self._stopped or controller.phase in ('done', 'idle'):
                 return
             silence_s = self._node.get_parameter('joint_state_timeout_s').value
-            silent = time.monotonic() - max(self.state_time, self._started)
+            silent = self._watch.silence(self.state_time, time.monotonic())
             if self._canceled.is_set():  # ~/cancel_execution (the sim got an empty trajectory)
                 self._stop_locked('execution canceled')
                 return

@@ -39,6 +39,7 @@ from trajectory_msgs.msg import JointTrajectory
 from stpik_motion_planner.conversions import trajectory_msg
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.scene_checks import format_id
+from stpik_motion_planner.state_watch import SilenceWatch, arrived
 
 STATE_QOS = QoSProfile(depth=10)
 ENDPOINTS = {  # read-only parameters of the node: name -> (default, description)
@@ -64,6 +65,8 @@ class TrajectoryExecution:
 
     Attributes:
         q: last arm configuration from /joint_states, shape (7,) [rad]; None before the first.
+        speed: largest |arm joint velocity| of the last /joint_states [rad/s]; None when it
+            carries no velocities.
         state_time: ``time.monotonic()`` of the last /joint_states [s].
     """
 
@@ -80,6 +83,7 @@ class TrajectoryExecution:
             )
         self.endpoints = {name: node.get_parameter(name).value for name in ENDPOINTS}
         self.q: np.ndarray | None = None
+        self.speed: float | None = None
         self.state_time = -math.inf
         # /joint_states only while executing: at 100 Hz its executor wake-ups alone kept one core
         # busy (rclpy's Python executor), which slowed planning 10-50x under load.
@@ -150,6 +154,7 @@ class TrajectoryExecution:
         index = {n: i for i, n in enumerate(msg.name)}
         if all(n in index for n in ARM_JOINTS):
             self.q = np.array([msg.position[index[n]] for n in ARM_JOINTS])
+            self.speed = arm_speed(msg)
             self.state_time = time.monotonic()
 
     def _follow_segments(self, result: PlanResult, object_id: str) -> PlanResult:
@@ -183,7 +188,8 @@ class TrajectoryExecution:
         return result
 
     def _reach(self, q_goal: np.ndarray, duration: float) -> str:
-        """Wait until the arm is at ``q_goal`` [rad], ``duration`` [s] being the segment's.
+        """Wait until the arm is at rest at ``q_goal`` [rad], ``duration`` [s] being the segment's
+        (:func:`~stpik_motion_planner.state_watch.arrived`).
 
         Returns:
             '' when reached, else why not.
@@ -193,13 +199,15 @@ class TrajectoryExecution:
         silence_s = node.get_parameter('joint_state_timeout_s').value
         tolerance = node.get_parameter('goal_tolerance_rad').value
         start = time.monotonic()
+        watch = SilenceWatch()
+        watch.start(start)
         while True:
             now = time.monotonic()
             if self._canceled.is_set():
                 return 'execution canceled'
-            if self.q is not None and np.max(np.abs(self.q - q_goal)) < tolerance:
+            if arrived(self.q, self.speed, q_goal, tolerance, now - start, duration):
                 return ''
-            silent = now - max(self.state_time, start)
+            silent = watch.silence(self.state_time, now)
             if silent > silence_s:
                 return (
                     f'the simulator stopped publishing {self.endpoints["joint_state_topic"]} '
@@ -222,3 +230,13 @@ class TrajectoryExecution:
         while not future.done() and time.monotonic() < deadline:
             time.sleep(0.01)
         return future.done() and future.result() is not None and future.result().success
+
+
+def arm_speed(msg: JointState) -> float | None:
+    """Largest |velocity| of the 7 arm joints in ``msg`` [rad/s]; None without velocities."""
+    if len(msg.velocity) != len(msg.name):
+        return None
+    index = {n: i for i, n in enumerate(msg.name)}
+    if not all(n in index for n in ARM_JOINTS):
+        return None
+    return max(abs(float(msg.velocity[index[n]])) for n in ARM_JOINTS)
