@@ -11,7 +11,8 @@ import math
 import numpy as np
 
 STALL_S = 0.5  # a check this late after the previous one means this process did not run [s]
-SETTLED_RAD_S = 1e-3  # an arm whose joints all move slower than this is at rest [rad/s]
+SETTLED_RAD_S = 0.01  # an arm whose joints all move slower than this is at rest [rad/s]
+# (the simulator publishes exactly 0 at rest; 0.01 leaves room for a real arm's encoder noise)
 
 
 class SilenceWatch:
