@@ -111,6 +111,13 @@ class SceneOracle:
             self.spent_s += self.cost_s[key]
         return self.cleared[key]
 
+    def approach_blockers(
+        self, relocated: tuple[str, ...], object_id: str
+    ) -> tuple[frozenset[str], ...] | None:
+        """The real oracle's per-approach blockers (no planner run), or None without them."""
+        read = getattr(self.inner, 'approach_blockers', None)
+        return None if read is None else read(tuple(relocated), object_id)
+
     def answer(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
         """Cached answer, or one real run (timed)."""
         key = (frozenset(relocated), object_id)
@@ -154,6 +161,12 @@ class MethodOracle:
             self.charged_s += self.scene.cost_s[key]
             return answer
         return self.scene.answers[key]
+
+    def approach_blockers(
+        self, relocated: tuple[str, ...], object_id: str
+    ) -> tuple[frozenset[str], ...] | None:
+        """The scene's per-approach blockers of an answer already asked (no planner run)."""
+        return self.scene.approach_blockers(relocated, object_id)
 
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """Feasibility only (for the exact search and the learners)."""

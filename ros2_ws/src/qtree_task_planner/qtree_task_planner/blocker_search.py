@@ -13,7 +13,12 @@ X relocated, o), asked with the empty drop zone where the oracle can
 (:func:`~qtree_task_planner.oracle.ask_clear`: the real planner would otherwise plan into slot N −
 |X| among as many placed objects, and a drop-zone failure would confirm a wrong report); a report
 that fails the check, or no report at all (``blocking_ids=None``), is replaced by the trivial sound
-constraint X = all obstacles not in S.
+constraint X = all obstacles not in S. An oracle that also reports the blockers of EACH approach
+(``approach_blockers(S, o)``: the in-process planner's sweeps, a TableOracle's clearing sets) gives
+a stronger constraint: o needs every blocker of one approach removed, so every set freeing o meets
+any HITTING SET of the approaches' blocker sets; the smallest one (often the single object in front
+of the hand in every approach, where the union names a dozen) is tried first, verified the same
+way, and the union is the fallback when its check fails.
 
 Search. A set S of obstacles is a CANDIDATE when its objects can be ordered so that each one's
 known constraints are met by the objects before it, and the target's by all of S (known
@@ -49,6 +54,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from itertools import combinations
 
 from qtree_task_planner.exceptions import InvalidParameterError, InvalidScenarioError
 from qtree_task_planner.oracle import (
@@ -251,10 +257,17 @@ class BlockerSearch:
             blocking = trivial
         else:
             blocking = frozenset(blockers) & self.all - done - {obj}
-            if self.verify and blocking != trivial:
-                rest = tuple(o for o in self.obstacles if o not in blocking and o != obj)
-                if self._verify(rest, obj):  # the report missed an approach
-                    blocking = trivial
+            narrow = self._narrow(done, obj, blocking)
+            if narrow is not None and not (
+                self.verify and self._verify(self._rest(narrow, obj), obj)
+            ):
+                blocking = narrow  # a sound (declared or verified) hitting set of the approaches
+            elif (
+                self.verify
+                and blocking != trivial
+                and self._verify(self._rest(blocking, obj), obj)
+            ):
+                blocking = trivial  # the report missed an approach
         if any(
             k[1] == obj and a.feasible and not k[0] & blocking for k, a in self.answers.items()
         ):
@@ -263,6 +276,29 @@ class BlockerSearch:
             self.certified = False
             self.contradictions += 1
         self.constraints.setdefault(obj, []).append(blocking)
+
+    def _rest(self, keep: frozenset[str], obj: str) -> tuple[str, ...]:
+        """Every obstacle but ``keep`` and ``obj`` (the relocated set of a verification)."""
+        return tuple(o for o in self.obstacles if o not in keep and o != obj)
+
+    def _narrow(
+        self, done: frozenset[str], obj: str, blocking: frozenset[str]
+    ) -> frozenset[str] | None:
+        """A smallest set meeting every approach's blockers, when the oracle reports them per
+        approach (``approach_blockers``) and it is smaller than ``blocking``; else None.
+
+        Each approach needs ALL of its blockers removed, so every set that frees ``obj`` meets
+        every hitting set of the approaches' blocker sets: one object in front of the hand in
+        every approach gives the constraint {that object} instead of the union of all."""
+        read = getattr(self.oracle, 'approach_blockers', None)
+        sets = read(tuple(sorted(done)), obj) if read is not None else None
+        if not sets:
+            return None
+        sets = [frozenset(b) & self.all - done - {obj} for b in sets]
+        if not all(sets):
+            return None
+        hitting = smallest_hitting_set(sets, self.rank)
+        return hitting if hitting < blocking else None
 
     # -- candidate enumeration --
 
@@ -412,6 +448,27 @@ class BlockerSearch:
             relevant=len(relevant),
             wall_time_s=time.monotonic() - self._start,
         )
+
+
+def smallest_hitting_set(
+    sets: list[frozenset[str]], rank: dict[str, int], exact_up_to: int = 4
+) -> frozenset[str]:
+    """A set meeting every one of ``sets`` (all non-empty): a smallest one when some has at most
+    ``exact_up_to`` objects (tried in ``rank`` order), else the greedy one (most sets met first).
+    """
+    universe = sorted(set().union(*sets), key=rank.__getitem__)
+    for size in range(1, min(exact_up_to, len(universe)) + 1):
+        for combo in combinations(universe, size):
+            chosen = frozenset(combo)
+            if all(b & chosen for b in sets):
+                return chosen
+    chosen: set[str] = set()
+    left = list(sets)
+    while left:
+        best = max(universe, key=lambda o: (sum(o in b for b in left), -rank[o]))
+        chosen.add(best)
+        left = [b for b in left if best not in b]
+    return frozenset(chosen)
 
 
 def blocker_search(

@@ -129,6 +129,18 @@ class TableOracle:
             return FeasibilityAnswer(False, tuple(min(left, key=len)) if left else ())
         return FeasibilityAnswer(False, tuple(sorted({o for need in left for o in need})))
 
+    def approach_blockers(
+        self, relocated: tuple[str, ...], object_id: str
+    ) -> tuple[frozenset[str], ...] | None:
+        """Each clearing set minus ``relocated`` (the planner's per-approach blockers' analogue;
+        exact, so as sound as the ``'union'`` report); None with ``report='none'`` or when the
+        object is feasible or has no clearing set."""
+        needs = self.requirements.get(object_id)
+        done = frozenset(relocated)
+        if self.report == 'none' or not needs or any(need <= done for need in needs):
+            return None
+        return tuple(need - done for need in needs)
+
 
 def ask_clear(oracle: Any, relocated: tuple[str, ...], object_id: str) -> bool:
     """Is ``object_id`` feasible once ``relocated`` are gone, placing it in the empty drop zone?
@@ -254,6 +266,30 @@ class MotionPlannerOracle:
         if union is not None and not getattr(result, 'blocked_by_immovable', False):
             return FeasibilityAnswer(False, union)
         return FeasibilityAnswer(False, blockers_of(result, relocated, object_id))
+
+    def approach_blockers(
+        self, relocated: tuple[str, ...], object_id: str
+    ) -> tuple[frozenset[str], ...] | None:
+        """Per working approach of the planner's sweeps, the objects in its way (not relocated).
+
+        The finer form of :meth:`_all_approach_blockers`: the object needs every blocker of ONE
+        approach removed, so any set meeting each of these sets is a constraint too
+        (:class:`~qtree_task_planner.blocker_search.BlockerSearch` verifies the smallest).
+
+        Returns:
+            One set per working approach (yaw order), or None when the planner has no complete
+            sweeps of the object, none works, or a working approach names no blocker (the
+            planner failed although its sweep is clear: the model cannot explain the answer).
+        """
+        finder = getattr(self.planner, 'blockers', None)
+        sweeps = getattr(finder, 'sweeps', {}).get(object_id) if finder is not None else None
+        if not sweeps:
+            return None
+        from stpik_motion_planner import blockers as module  # lazy: heavy imports
+
+        done = frozenset(relocated) | {object_id}
+        sets = tuple(frozenset(s.blockers(done, module.HIT_MARGIN_M)) for s in sweeps if s.works)
+        return sets if sets and all(sets) else None
 
     def _all_approach_blockers(
         self, relocated: tuple[str, ...], object_id: str

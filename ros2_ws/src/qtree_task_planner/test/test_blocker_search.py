@@ -1,5 +1,7 @@
 """BLOCKER-SEARCH: optimality on hand-built scenes, agreement with the exact search, budgets."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -14,10 +16,11 @@ from qtree_task_planner.blocker_search import (
     BlockerSearch,
     BlockerSearchConfig,
     blocker_search,
+    smallest_hitting_set,
 )
 from qtree_task_planner.exact import solve_exact
 from qtree_task_planner.exceptions import InvalidParameterError, InvalidScenarioError
-from qtree_task_planner.oracle import MemoOracle, TableOracle
+from qtree_task_planner.oracle import MemoOracle, MotionPlannerOracle, TableOracle
 from qtree_task_planner.synthetic import (
     TOY_OBSTACLES,
     TOY_OPTIMAL_LEVEL,
@@ -218,3 +221,65 @@ def test_a_contradicted_constraint_uncertifies_the_result() -> None:
     assert result.contradictions == 1 and result.certified is False
     clean = blocker_search(('O1', 'O2', 'O3'), 'T', _OrderEffectOracle())
     assert clean.certified and clean.contradictions == 0 and clean.sequence == ('O2', 'T')
+
+
+def test_smallest_hitting_set() -> None:
+    rank = {o: i for i, o in enumerate(('O1', 'O2', 'O3', 'O4', 'O5'))}
+    shared = [frozenset({'O2', 'O1'}), frozenset({'O1', 'O3'}), frozenset({'O4', 'O1'})]
+    assert smallest_hitting_set(shared, rank) == {'O1'}
+    apart = [frozenset({'O1'}), frozenset({'O2', 'O3'}), frozenset({'O3', 'O4'})]
+    assert smallest_hitting_set(apart, rank) == {'O1', 'O3'}
+    greedy = smallest_hitting_set(apart, rank, exact_up_to=0)  # the fallback for large sets
+    assert all(b & greedy for b in apart) and greedy == {'O1', 'O3'}
+
+
+class _UnionReportOnly:
+    """A TableOracle seen without its per-approach blockers (what the ROS service gives)."""
+
+    def __init__(self, inner: TableOracle) -> None:
+        self.inner = inner
+        self.sound_blockers = inner.sound_blockers
+
+    @property
+    def planner_runs(self) -> int:
+        return self.inner.planner_runs
+
+    def answer(self, relocated, object_id):
+        return self.inner.answer(relocated, object_id)
+
+    def feasible(self, relocated, object_id) -> bool:
+        return self.inner.feasible(relocated, object_id)
+
+
+@pytest.mark.parametrize('report', ['union', 'fewest'])
+def test_per_approach_blockers_narrow_the_constraint_to_a_hitting_set(report) -> None:
+    # every approach of T passes O1, and one more object of O2..O6 each; O1 needs O7 gone
+    requirements = {'T': [{'O1', f'O{i}'} for i in range(2, 7)], 'O1': [{'O7'}]}
+    obstacles = tuple(f'O{i}' for i in range(1, 9))
+    narrowed = BlockerSearch(obstacles, 'T', TableOracle(requirements, report=report))
+    result = narrowed.run()
+    assert narrowed.constraints['T'][0] == {'O1'}  # not the union O1..O6
+    plain = blocker_search(
+        obstacles, 'T', _UnionReportOnly(TableOracle(requirements, report=report))
+    )
+    exact = solve_exact(obstacles, 'T', TableOracle(requirements))
+    assert result.certified and len(result.sequence) == len(plain.sequence) == exact.level == 4
+    assert _feasible_order(result.sequence, requirements)
+    assert result.planner_runs < plain.planner_runs
+
+
+def test_planner_oracle_reads_every_working_approach() -> None:
+    from stpik_motion_planner.blockers import HIT_MARGIN_M, NEAR_MARGIN_M, Sweep
+
+    near, far = HIT_MARGIN_M / 2, (HIT_MARGIN_M + NEAR_MARGIN_M) / 2
+    sweeps = [
+        Sweep(0.0, True, {'O1': near, 'O2': near, 'O3': far}),
+        Sweep(0.4, False, {}),  # out of reach: no blockers to meet
+        Sweep(-0.4, True, {'O1': near, 'O4': near}),
+    ]
+    planner = SimpleNamespace(blockers=SimpleNamespace(sweeps={'T': sweeps}))
+    oracle = MotionPlannerOracle(scenario=None, planner=planner)
+    assert oracle.approach_blockers((), 'T') == ({'O1', 'O2'}, {'O1', 'O4'})
+    assert oracle.approach_blockers(('O2',), 'T') == ({'O1'}, {'O1', 'O4'})
+    assert oracle.approach_blockers(('O1', 'O2'), 'T') is None  # a clear sweep: no model
+    assert oracle.approach_blockers((), 'O5') is None  # never swept
