@@ -56,7 +56,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--exact-max-runs', type=int, default=3000)
     parser.add_argument('--exact-time-s', type=float, default=60.0)
     parser.add_argument('--learner-episodes', type=int, default=5000)
-    parser.add_argument('--learner-time-s', type=float, default=20.0)
+    parser.add_argument('--learner-time-s', type=float, default=10.0)
     parser.add_argument('--search-max-runs', type=int, default=3000)
     parser.add_argument('--search-time-s', type=float, default=120.0)
     parser.add_argument('--out', type=Path, default=RESULTS)

@@ -60,7 +60,7 @@ class ScaleTask:
     exact_max_runs: int = 3000
     exact_time_s: float = 60.0
     learner_episodes: int = 5000
-    learner_time_s: float = 20.0
+    learner_time_s: float = 10.0
     search_max_runs: int = 3000
     search_time_s: float = 120.0
 

@@ -285,7 +285,8 @@ class BlockerSearch:
         self, done: frozenset[str], obj: str, blocking: frozenset[str]
     ) -> frozenset[str] | None:
         """A smallest set meeting every approach's blockers, when the oracle reports them per
-        approach (``approach_blockers``) and it is smaller than ``blocking``; else None.
+        approach (``approach_blockers``) and it differs from the report ``blocking`` and is no
+        larger (the planner's union contains it; a one-approach report need not); else None.
 
         Each approach needs ALL of its blockers removed, so every set that frees ``obj`` meets
         every hitting set of the approaches' blocker sets: one object in front of the hand in
@@ -298,7 +299,7 @@ class BlockerSearch:
         if not all(sets):
             return None
         hitting = smallest_hitting_set(sets, self.rank)
-        return hitting if hitting < blocking else None
+        return hitting if hitting != blocking and len(hitting) <= len(blocking) else None
 
     # -- candidate enumeration --
 

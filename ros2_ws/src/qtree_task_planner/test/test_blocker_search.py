@@ -283,3 +283,15 @@ def test_planner_oracle_reads_every_working_approach() -> None:
     assert oracle.approach_blockers(('O2',), 'T') == ({'O1'}, {'O1', 'O4'})
     assert oracle.approach_blockers(('O1', 'O2'), 'T') is None  # a clear sweep: no model
     assert oracle.approach_blockers((), 'O5') is None  # never swept
+
+
+def test_a_hitting_set_outside_a_one_approach_report_is_verified_and_kept() -> None:
+    # 'fewest' names O1, O2 (one approach); T can also go once O4, O5 are gone: that report fails
+    # its check, while {O1, O4} meets every approach and passes it
+    requirements = {'T': [{'O1', 'O2'}, {'O1', 'O3'}, {'O4', 'O5'}]}
+    obstacles = ('O1', 'O2', 'O3', 'O4', 'O5')
+    search = BlockerSearch(obstacles, 'T', TableOracle(requirements, report='fewest'))
+    result = search.run()
+    assert search.constraints['T'][0] == {'O1', 'O4'}
+    assert result.certified and len(result.sequence) == 3
+    assert _feasible_order(result.sequence, requirements)
