@@ -40,8 +40,13 @@ means no feasible sequence exists at all (e.g. the target blocked by nothing mov
 names only its most promising approach), the search is a HEURISTIC: constraints may be wrong, the
 answer is feasible (every step was checked) but may be longer than the optimum, and
 ``unsolvable`` may be wrong. Without monotonicity a verification can also be wrong; a constraint
-contradicted by a known feasible answer (o feasible after a set that meets none of its objects)
-proves that monotonicity fails, and the result is then uncertified (``contradictions`` > 0).
+X of o contradicted by a known feasible answer (o feasible after a set that meets none of X, or
+a verification that found o feasible with more objects than X standing) proves that
+monotonicity fails: the result is then uncertified (``contradictions`` > 0), the constraint is
+replaced by the weakest one its answer gives (X = all obstacles not in that answer's set S, which
+only claims that no subset of S frees o), and the enumeration starts again from the smallest size
+(found on generated clutter, N = 50: the planner freed the target with O1 standing but not once
+O1 was gone too, and a verified constraint hid the optimum of 2 relocations).
 
 Budget. ``max_planner_runs`` (real oracle runs), ``time_limit_s`` and ``max_expansions`` (DFS
 nodes of the candidate enumeration) bound the search; hitting one returns ``status='budget'``
@@ -204,6 +209,10 @@ class BlockerSearch:
         self._clear: dict[SetKey, bool] = {}
         self.queries = self.verifications = self.candidates = self.expansions = 0
         self.contradictions = 0
+        self._origin: dict[tuple[str, frozenset[str]], list[frozenset[str]]] = {}  # -> its sets S
+        self._weakest: set[tuple[str, frozenset[str]]] = set()  # repaired: never again
+        self._standing: dict[str, list[frozenset[str]]] = {}  # obstacles standing, o feasible
+        self._restart = False  # a repair weakened a constraint: enumerate from the smallest size
         self.lower_bound = 1
         self._cut = False
         self._failed: dict[frozenset[str], bool] = {}
@@ -224,6 +233,8 @@ class BlockerSearch:
             self._check_budget()
             self.queries += 1
             self.answers[key] = ask(self.oracle, order, obj)
+            if self.answers[key].feasible:
+                self._standing.setdefault(obj, []).append(self.all - key[0] - {obj})
         return self.answers[key]
 
     def _verify(self, rest: tuple[str, ...], obj: str) -> bool:
@@ -234,6 +245,8 @@ class BlockerSearch:
             self.queries += 1
             self.verifications += 1
             self._clear[key] = ask_clear(self.oracle, rest, obj)
+            if self._clear[key]:
+                self._standing.setdefault(obj, []).append(self.all - key[0] - {obj})
         return self._clear[key]
 
     def _met(self, obj: str, done: frozenset[str]) -> bool:
@@ -268,14 +281,44 @@ class BlockerSearch:
                 and self._verify(self._rest(blocking, obj), obj)
             ):
                 blocking = trivial  # the report missed an approach
-        if any(
-            k[1] == obj and a.feasible and not k[0] & blocking for k, a in self.answers.items()
-        ):
-            # obj was feasible after a set meeting no object of the constraint: feasibility is
-            # not monotone here (an order effect), so no bound or optimum is proven any more.
-            self.certified = False
-            self.contradictions += 1
-        self.constraints.setdefault(obj, []).append(blocking)
+        if self._contradicted(obj, blocking):  # a known answer already refutes it
+            self._uncertify()
+            blocking = trivial
+            self._weakest.add((obj, blocking))
+        known = self.constraints.setdefault(obj, [])
+        if blocking not in known:
+            known.append(blocking)
+        origins = self._origin.setdefault((obj, blocking), [])
+        if done not in origins:
+            origins.append(done)
+        self._repair(obj)
+
+    def _contradicted(self, obj: str, x: frozenset[str]) -> bool:
+        """``obj`` was found feasible with every object of ``x`` standing (and maybe more): by
+        monotonicity ``x`` could not then be a constraint. Repaired constraints are final."""
+        if (obj, x) in self._weakest:
+            return False
+        return any(x <= p for p in self._standing.get(obj, ()))
+
+    def _uncertify(self) -> None:
+        self.certified = False
+        self.contradictions += 1
+
+    def _repair(self, obj: str) -> None:
+        """Replace each contradicted constraint of ``obj`` by the weakest constraints of the
+        answers it came from (all obstacles not in their set S; see the module docstring)."""
+        repaired: list[frozenset[str]] = []
+        for x in self.constraints.get(obj, ()):
+            weaker = [x]
+            if self._contradicted(obj, x):
+                self._uncertify()
+                self._restart = True
+                weaker = [self.all - done - {obj} for done in self._origin[(obj, x)]]
+                for w, done in zip(weaker, self._origin[(obj, x)], strict=True):
+                    self._weakest.add((obj, w))
+                    self._origin.setdefault((obj, w), [done])
+            repaired += [w for w in weaker if w not in repaired]
+        self.constraints[obj] = repaired
 
     def _rest(self, keep: frozenset[str], obj: str) -> tuple[str, ...]:
         """Every obstacle but ``keep`` and ``obj`` (the relocated set of a verification)."""
@@ -349,13 +392,32 @@ class BlockerSearch:
                 used |= c
         return count
 
+    def _reachable(self) -> frozenset[str]:
+        """Obstacles that may belong to some candidate: the least fixpoint of "every known
+        constraint of o meets the set" grown from the empty set (an object never refused has no
+        constraint and is in it). In a candidate's order each object's constraints are met by
+        the objects before it, so by induction every candidate lies inside this set."""
+        reach: set[str] = set()
+        grown = True
+        while grown:
+            grown = False
+            for obj in self.obstacles:
+                if obj not in reach and all(c & reach for c in self.constraints.get(obj, ())):
+                    reach.add(obj)
+                    grown = True
+        return frozenset(reach)
+
     def _candidate(self, k: int) -> list[str] | None:
         """The first candidate with at most ``k`` obstacles (in its order), or None.
 
         Sets shown to have no candidate superset of size <= k stay in ``self._failed`` until k
-        grows: more constraints never create a candidate.
+        grows: more constraints never create a candidate. Only objects of :meth:`_reachable`
+        are branched on: a target constraint that none of them meets proves at once that no
+        candidate exists (unsolvable), where plain branching would enumerate every cycle of
+        mutually blocked objects up to size k.
         """
         failed = self._failed  # set -> whether the size bound cut its sub-tree
+        reach = self._reachable()
 
         def dfs(chosen: frozenset[str]) -> tuple[list[str] | None, bool]:
             self.expansions += 1
@@ -369,6 +431,7 @@ class BlockerSearch:
             branch = self._branch(chosen, order)
             if branch is None:
                 return order, False
+            branch = [o for o in branch if o in reach]
             if not branch:
                 return None, False
             if len(chosen) >= k or len(chosen) + self._disjoint_unmet(chosen, order) > k:
@@ -426,6 +489,8 @@ class BlockerSearch:
                     continue
                 if self._test(order):
                     return self._result((*order, self.target), STATUS_OPTIMAL, '')
+                if self._restart:  # weaker constraints: smaller candidates may exist again
+                    k, self._failed, self._restart = 0, {}, False
             self.lower_bound = 0
             return self._result((), STATUS_UNSOLVABLE, '')
         except _BudgetExceededError as hit:

@@ -32,6 +32,7 @@ blocker report. Oracles without it answer with ``feasible()``.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
+from itertools import accumulate
 from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 SetKey = tuple[frozenset[str], str]
@@ -196,6 +197,13 @@ class MemoOracle:
             self.planner_runs += 1
         return self.results[key]
 
+    def approach_blockers(
+        self, relocated: tuple[str, ...], object_id: str
+    ) -> tuple[frozenset[str], ...] | None:
+        """``inner``'s per-approach blockers of a pair already asked, or None (no run)."""
+        read = getattr(self.inner, 'approach_blockers', None)
+        return None if read is None else read(tuple(relocated), object_id)
+
     def answer(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
         """Answer with blockers from the memo, or ask ``inner`` once (see :func:`ask`)."""
         self.queries += 1
@@ -236,6 +244,7 @@ class MotionPlannerOracle:
         self.planner_runs = 0
         self.queries = 0
         self.planning_time_s = 0.0
+        self._approaches: dict[SetKey, tuple[frozenset[str], ...] | None] = {}
 
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """Ask the planner (``check(object_id, relocated_ids)``) and count real runs."""
@@ -262,6 +271,8 @@ class MotionPlannerOracle:
             self.planning_time_s += float(getattr(result, 'planning_time', 0.0) or 0.0)
         if result.feasible:
             return FeasibilityAnswer(True, ())
+        key = (frozenset(relocated), object_id)
+        self._approaches[key] = approach_blockers_of(result, relocated, object_id)
         union = self._all_approach_blockers(relocated, object_id)
         if union is not None and not getattr(result, 'blocked_by_immovable', False):
             return FeasibilityAnswer(False, union)
@@ -270,26 +281,14 @@ class MotionPlannerOracle:
     def approach_blockers(
         self, relocated: tuple[str, ...], object_id: str
     ) -> tuple[frozenset[str], ...] | None:
-        """Per working approach of the planner's sweeps, the objects in its way (not relocated).
+        """The blockers of every working approach of the last answer about this pair (no run).
 
         The finer form of :meth:`_all_approach_blockers`: the object needs every blocker of ONE
         approach removed, so any set meeting each of these sets is a constraint too
-        (:class:`~qtree_task_planner.blocker_search.BlockerSearch` verifies the smallest).
-
-        Returns:
-            One set per working approach (yaw order), or None when the planner has no complete
-            sweeps of the object, none works, or a working approach names no blocker (the
-            planner failed although its sweep is clear: the model cannot explain the answer).
+        (:class:`~qtree_task_planner.blocker_search.BlockerSearch` verifies the smallest). See
+        :func:`approach_blockers_of`; None for a pair not asked yet.
         """
-        finder = getattr(self.planner, 'blockers', None)
-        sweeps = getattr(finder, 'sweeps', {}).get(object_id) if finder is not None else None
-        if not sweeps:
-            return None
-        from stpik_motion_planner import blockers as module  # lazy: heavy imports
-
-        done = frozenset(relocated) | {object_id}
-        sets = tuple(frozenset(s.blockers(done, module.HIT_MARGIN_M)) for s in sweeps if s.works)
-        return sets if sets and all(sets) else None
+        return self._approaches.get((frozenset(relocated), object_id))
 
     def _all_approach_blockers(
         self, relocated: tuple[str, ...], object_id: str
@@ -313,6 +312,30 @@ class MotionPlannerOracle:
             if sweep.works:
                 ids.update(sweep.blockers(done, module.HIT_MARGIN_M))
         return tuple(sorted(ids)) or None
+
+
+def approach_blockers_of(
+    result: Any, relocated: Sequence[str], object_id: str
+) -> tuple[frozenset[str], ...] | None:
+    """The per-approach blockers of an infeasible planner result (``approach_blockers``) or
+    RelocateObject response (``approach_blocking_ids`` cut by ``approach_blocker_counts``).
+
+    Returns:
+        One set per working approach, ids already relocated and the object itself dropped; None
+        when none is reported, the counts do not add up to the ids (a malformed response), or
+        some approach names nobody (the planner failed where its sweep is clear: no model).
+    """
+    groups = getattr(result, 'approach_blockers', None)
+    if groups is None:
+        ids = list(getattr(result, 'approach_blocking_ids', ()) or ())
+        counts = [int(c) for c in getattr(result, 'approach_blocker_counts', ()) or ()]
+        if sum(counts) != len(ids):
+            return None
+        ends = accumulate(counts)
+        groups = [ids[end - count : end] for count, end in zip(counts, ends, strict=True)]
+    done = set(relocated) | {object_id}
+    sets = tuple(frozenset(group) - done for group in groups)
+    return sets if sets and all(sets) else None
 
 
 def blockers_of(result: Any, relocated: Sequence[str], object_id: str) -> tuple[str, ...] | None:

@@ -16,7 +16,12 @@ import rclpy
 from qtree_msgs.srv import RelocateObject
 
 from qtree_task_planner.exceptions import OracleUnavailableError
-from qtree_task_planner.oracle import FeasibilityAnswer, blockers_of
+from qtree_task_planner.oracle import (
+    FeasibilityAnswer,
+    SetKey,
+    approach_blockers_of,
+    blockers_of,
+)
 from qtree_task_planner.retry import Backoff
 
 
@@ -81,6 +86,7 @@ class RosPlannerOracle:
         self.backoff = backoff or Backoff()
         self.planner_runs = 0
         self.retries = 0
+        self._approaches: dict[SetKey, tuple[frozenset[str], ...] | None] = {}
 
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """Ask the motion planner whether ``object_id`` can be relocated after ``relocated``.
@@ -146,4 +152,13 @@ class RosPlannerOracle:
             return FeasibilityAnswer(True, ())
         if response.reason >= 300:  # a time-out says nothing about who blocks
             return FeasibilityAnswer(False, None)
+        key = (frozenset(relocated), object_id)
+        self._approaches[key] = approach_blockers_of(response, relocated, object_id)
         return FeasibilityAnswer(False, blockers_of(response, relocated, object_id))
+
+    def approach_blockers(
+        self, relocated: tuple[str, ...], object_id: str
+    ) -> tuple[frozenset[str], ...] | None:
+        """The per-approach blockers (``approach_blocking_ids``) of the last infeasible
+        response about this pair, or None (no request is sent)."""
+        return self._approaches.get((frozenset(relocated), object_id))

@@ -129,3 +129,29 @@ def test_answer_reads_blocking_ids() -> None:
     assert oracle.answer(('O3',), 'T') == (False, ('O1', 'O2'))  # relocated ids dropped
     assert oracle.answer((), 'T') == (False, ())  # blocked by nothing movable
     assert oracle.answer((), 'T') == (False, None)  # no blocker named: no report
+
+
+def test_answer_keeps_the_per_approach_blockers() -> None:
+    blocked = Response.SCENE_COLLISION
+    client = ScriptedClient(
+        Response(
+            blocking_ids=['O1'],
+            approach_blocking_ids=['O1', 'O1', 'O2'],
+            approach_blocker_counts=[1, 2],
+            feasible=False,
+            reason=blocked,
+        ),
+        Response(  # malformed: the counts name more ids than sent
+            blocking_ids=['O1'],
+            approach_blocking_ids=['O1'],
+            approach_blocker_counts=[1, 2],
+            feasible=False,
+            reason=blocked,
+        ),
+    )
+    oracle = RosPlannerOracle(client, 1.0, 1.0)
+    assert oracle.approach_blockers((), 'T') is None  # nothing asked yet
+    assert oracle.answer((), 'T') == (False, ('O1',))
+    assert oracle.approach_blockers((), 'T') == ({'O1'}, {'O1', 'O2'})
+    assert oracle.answer(('O3',), 'T') == (False, ('O1',))
+    assert oracle.approach_blockers(('O3',), 'T') is None  # the report is dropped, not guessed

@@ -14,6 +14,8 @@ from the first approach not swept yet.
 For a request ``(relocated, object)`` the blockers of an approach are the objects, not yet
 relocated, closer than :data:`HIT_MARGIN_M` to its sweep. The answer is the approach with the
 fewest blockers (ties: the planner's yaw order); its blockers sorted nearest the base first.
+Every working approach's blockers are reported too (``approach_blockers``, fewest first): the
+object needs all blockers of one approach removed, which a task planner can use (a hitting set).
 When every working approach is free of blockers at that margin (the planner failed although the
 swept motion is clear: its own Cartesian path differed), the objects within
 :data:`NEAR_MARGIN_M` of the best sweep are named instead. No working approach at all gives
@@ -71,12 +73,15 @@ class Blockers:
         immovable: no approach works even with every movable object removed.
         yaw: yaw of the chosen approach [rad] (NaN when ``immovable``).
         complete: every approach was swept (False: the time limit ran out first).
+        approaches: the blockers of every working approach swept, fewest first (ties: yaw
+            order), each nearest the base first.
     """
 
     ids: tuple[str, ...]
     immovable: bool
     yaw: float = float('nan')
     complete: bool = True
+    approaches: tuple[tuple[str, ...], ...] = ()
 
 
 class BlockerFinder:
@@ -112,9 +117,15 @@ class BlockerFinder:
         ids = best.blockers(done, HIT_MARGIN_M)
         if not ids:
             ids = best.blockers(done, NEAR_MARGIN_M)
+        approaches = sorted(
+            (tuple(self._from_base(s.blockers(done, HIT_MARGIN_M))) for s in working), key=len
+        )
+        return Blockers(tuple(self._from_base(ids)), False, best.yaw, complete, tuple(approaches))
+
+    def _from_base(self, ids: list[str]) -> list[str]:
+        """``ids`` sorted nearest the base first (ties: by id)."""
         scenario = self.planner.scenario
-        ids.sort(key=lambda i: (math.hypot(*scenario.object(i).position[:2]), i))
-        return Blockers(tuple(ids), False, best.yaw, complete)
+        return sorted(ids, key=lambda i: (math.hypot(*scenario.object(i).position[:2]), i))
 
     def annotate(
         self,
@@ -156,6 +167,7 @@ class BlockerFinder:
             message=message,
             blocking_ids=found.ids,
             blocked_by_immovable=found.immovable,
+            approach_blockers=found.approaches,
             planning_time=result.planning_time + spent,
             timings=timings,
         )

@@ -88,6 +88,8 @@ def fill_relocate_response(
     response.ee_path = pose_array_msg(result.ee_path, EE_FRAME)
     response.blocking_ids = list(result.blocking_ids)
     response.blocked_by_immovable = result.blocked_by_immovable
+    response.approach_blocking_ids = [i for ids in result.approach_blockers for i in ids]
+    response.approach_blocker_counts = [len(ids) for ids in result.approach_blockers]
     return response
 
 

@@ -59,6 +59,8 @@ class PlanResult:
         blocking_ids: infeasible planning answers: the movable objects whose removal the planner
             believes necessary for its most promising approach (see :mod:`.blockers`).
         blocked_by_immovable: no approach works even with every movable object removed.
+        approach_blockers: infeasible planning answers: the blockers of every working approach,
+            fewest first (``blocking_ids`` is the first, or the near-miss fallback).
     """
 
     feasible: bool
@@ -75,3 +77,4 @@ class PlanResult:
     approach_yaw: float = float('nan')
     blocking_ids: tuple[str, ...] = ()
     blocked_by_immovable: bool = False
+    approach_blockers: tuple[tuple[str, ...], ...] = ()

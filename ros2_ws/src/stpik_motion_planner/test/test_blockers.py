@@ -34,8 +34,24 @@ def test_target_behind_one_obstacle_is_blocked_by_it(behind_one):
     assert result.blocking_ids == ('O1',)
     assert not result.blocked_by_immovable
     assert 'blockers: O1' in result.message
+    # every working approach's blockers, fewest first: the best one is the field above
+    assert result.approach_blockers[0] == ('O1',)
+    lengths = [len(ids) for ids in result.approach_blockers]
+    assert lengths == sorted(lengths) and all('T' not in ids for ids in result.approach_blockers)
     cleared = behind_one.check('T', ['O1'])
     assert cleared.feasible and cleared.blocking_ids == () and not cleared.blocked_by_immovable
+    assert cleared.approach_blockers == ()
+
+
+def test_response_carries_every_approach_cut_by_its_count(behind_one):
+    from qtree_msgs.srv import RelocateObject
+    from stpik_motion_planner.conversions import fill_relocate_response
+
+    result = behind_one.check('T', [])
+    response = fill_relocate_response(RelocateObject.Response(), result, result.message)
+    counts = list(response.approach_blocker_counts)
+    assert counts == [len(ids) for ids in result.approach_blockers] and counts[0] == 1
+    assert list(response.approach_blocking_ids) == [i for a in result.approach_blockers for i in a]
 
 
 def test_cached_answer_keeps_its_blockers(behind_one):
