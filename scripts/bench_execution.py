@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import sys
 import time
@@ -112,6 +113,7 @@ def write(args: argparse.Namespace, runs: list[dict], done: int, planned: int, s
         'rows': rows,
         'runs': runs,
         'wall_s': round(time.time() - start, 1),
+        'load_average_5min': round(os.getloadavg()[1], 2),  # other processes on the cores
     }
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / 'execution.json').write_text(json.dumps(report, indent=1) + '\n')
@@ -207,9 +209,9 @@ def markdown(report: dict) -> str:
         'off by the offset, and the ROS open-loop executor then never sees its goal within '
         '`goal_tolerance_rad` (0.02 rad) and answers EXECUTION_FAILED after '
         '`execution_timeout_s`; here it is let through to show the drift.',
-        '- Wall-time step percentiles include preemption on the shared machine (load average '
-        'about 10 on 2 cores during the run); the thread CPU time is the cost of the step '
-        'itself. The integrator may re-run the benchmark on an idle machine.',
+        '- Wall-time step percentiles include preemption by other processes (5-minute load '
+        f'average {report.get("load_average_5min", "?")} at the end of the run, '
+        f'{os.cpu_count()} cores); the thread CPU time is the cost of the step itself.',
     ]
     failures = [r for r in report['rows'] if r['failures']]
     if failures:
