@@ -167,6 +167,7 @@ class DisturbedDrive:
 
     def __init__(self, sim: Any, disturbances: Disturbances | None = None) -> None:
         self.sim = sim
+        self.applied_kind = ''  # kind of the command in force: 'trajectory', 'point' or ''
         self.delay = CommandDelay()
         self.noise = MeasurementNoise()
         self.disturbances = Disturbances()
@@ -209,6 +210,6 @@ class DisturbedDrive:
         return self.noise.measure(self.sim.q)
 
     def _apply(self, kind: str, args: tuple) -> bool:
-        if kind == 'point':
-            return self.sim.set_point(*args)
-        return self.sim.set_reference(*args)
+        clamped = self.sim.set_point(*args) if kind == 'point' else self.sim.set_reference(*args)
+        self.applied_kind = kind  # after the integrator accepted it
+        return clamped

@@ -1,7 +1,5 @@
-"""``jaco2_sim`` node: kinematic Jaco² simulator (joint states, scene, grasp attach/detach).
-
-Parameters, entities and callbacks that convert messages and call
-:class:`~jaco2_sim.simulation.Simulation` (limits and failure behaviour are documented there).
+"""``jaco2_sim`` node: kinematic Jaco² simulator (joint states, scene, grasp attach/detach); its
+callbacks convert messages and call :class:`~jaco2_sim.simulation.Simulation` (limits, failures).
 """
 
 from __future__ import annotations
@@ -43,16 +41,15 @@ class Jaco2SimNode(Node):
             *map(p, ('scenario', 'sim_rate_hz', 'finger_angle_rad', 'initial_configuration')),
             api.disturbance_values(self),
         )
-        self.sim = self.core.sim
         self.add_on_set_parameters_callback(lambda ps: api.check_parameters(self, self.core, ps))
         self.add_post_set_parameters_callback(self._apply_parameters)
         self.state_pub = self.create_publisher(JointState, '/joint_states', api.STATE_QOS)
         self.scene_pub = self.create_publisher(Scene, '/scene', api.LATCHED_QOS)
         self.urdf_pub = self.create_publisher(String, '/robot_description', api.LATCHED_QOS)
-        qos, on_raw = api.TRAJECTORY_QOS, self._on_raw_trajectory
         # motion on its own thread: services and parameters (scene loading) never stop it (#18)
         self._motion = MutuallyExclusiveCallbackGroup()
-        group = {'callback_group': self._motion}
+        qos, group = api.TRAJECTORY_QOS, {'callback_group': self._motion}
+        on_raw = self._on_raw_trajectory
         self.create_subscription(
             JointTrajectory, '/joint_trajectory', on_raw, qos, raw=True, **group
         )
@@ -61,16 +58,11 @@ class Jaco2SimNode(Node):
                                (SetScene, '~/set_scene', self._on_set_scene),
                                (AttachObject, '~/attach_object', self._on_attach)]:  # fmt: skip
             self.create_service(kind, name, cb, qos_profile=SERVICE_QOS)
-        self.timer = self.create_timer(self.sim.period, self._on_timer, self._motion)
+        self.timer = self.create_timer(self.core.sim.period, self._on_timer, self._motion)
         self.urdf_pub.publish(String(data=urdf_text()))
         self._publish_scene()
-        rate = f'{1 / self.sim.period:g} Hz'
-        self.get_logger().info(f'jaco2_sim ready: scenario {self.scenario.name}, {rate}')
-
-    @property
-    def scenario(self):
-        """The current scene (:class:`~qtree_scene.scene.Scenario`)."""
-        return self.core.scenario
+        rate, name = f'{1 / self.core.sim.period:g} Hz', self.core.scenario.name
+        self.get_logger().info(f'jaco2_sim ready: scenario {name}, {rate}')
 
     def _apply_parameters(self, params: list[Parameter]) -> None:
         api.apply_disturbances(self, self.core, params)
@@ -80,11 +72,9 @@ class Jaco2SimNode(Node):
                     self._change(self.core.load, p.value)
                 except Exception as err:  # checked before, so never expected
                     self.get_logger().error(f'scenario not loaded: {type(err).__name__}: {err}')
-            elif p.name == 'sim_rate_hz':
-                self.timer.cancel()
-                self.destroy_timer(self.timer)
-                self.sim.period = 1.0 / p.value
-                self.timer = self.create_timer(self.sim.period, self._on_timer, self._motion)
+            elif p.name == 'sim_rate_hz':  # the timer keeps running at the new period
+                self.core.sim.period = 1.0 / p.value
+                self.timer.timer_period_ns = round(1e9 * self.core.sim.period)
 
     def _change(self, action, *args) -> str:
         """Run a scene change of the core, publish the new scene; the change's message."""
@@ -96,7 +86,7 @@ class Jaco2SimNode(Node):
         finished, errors = self.core.step()
         for error in errors:
             self._reject_trajectory(f'(delayed command) {error}')
-        if finished:
+        if finished:  # a whole trajectory; streamed references are counted by the core (#26)
             self.get_logger().info('trajectory finished')
         now = self.get_clock().now()
         self.state_pub.publish(conv.joint_state_msg(now.to_msg(), *self.core.joint_state()))
@@ -105,7 +95,7 @@ class Jaco2SimNode(Node):
 
     def _publish_scene(self) -> None:
         now = self.get_clock().now()
-        with self.core.lock:
+        with self.core.lock:  # the message is built under the lock, published outside it
             msg = conv.scene_msg(self.core.world, now.to_msg())
         self.scene_pub.publish(msg)
         self.core.scene_published(now.nanoseconds * 1e-9)
@@ -130,7 +120,7 @@ class Jaco2SimNode(Node):
         self.get_logger().warning(f'trajectory rejected: {why}')
 
     def _on_reset(self, request: ResetScene.Request, response: ResetScene.Response):
-        name = request.scenario or self.scenario.source or self.scenario.name
+        name = request.scenario or self.core.scenario.source or self.core.scenario.name
         change = lambda: self._change(self.core.reset_scene, request.scenario)  # noqa: E731
         return answer(response, change, 'reset_scene', quote(name), self.get_logger())
 
@@ -144,14 +134,16 @@ class Jaco2SimNode(Node):
         return answer(response, change, 'attach_object', quote(args[0]), self.get_logger())
 
 
-def main(args: list[str] | None = None) -> None:
-    """Run the node until SIGINT/SIGTERM (exit code 0); exit code 2 on bad start-up parameters."""
+def run(args: list[str] | None = None, **options: Any) -> int:
+    """Run the node until SIGINT/SIGTERM (0); 2 on bad start-up parameters."""
     startup = (Jaco2SimError, ModelError, ScenarioError, InvalidParameterValueException)
     executor = lambda context: MultiThreadedExecutor(2, context=context)  # noqa: E731
-    code = run_node(
-        Jaco2SimNode, args=args, make_executor=executor, startup_errors=startup, name='jaco2_sim'
-    )
-    sys.exit(code)
+    return run_node(Jaco2SimNode, args=args, make_executor=executor, startup_errors=startup,
+                    name='jaco2_sim', **options)  # fmt: skip
+
+
+def main(args: list[str] | None = None) -> None:  # the console script
+    sys.exit(run(args))
 
 
 if __name__ == '__main__':

@@ -78,6 +78,7 @@ class Simulation:
         self.fingers[:3] = self.robot.finger_angle
         self._scene_version = -1
         self._last_scene_s = 0.0
+        self.references_reached = 0  # streamed references reached (closed loop) [count]
         # The node steps on one thread and loads scenes on another (#18): parsing a file stays
         # outside this lock, only the swap and the motion commands take it.
         self.lock = threading.Lock()
@@ -146,11 +147,15 @@ class Simulation:
         """One period: delayed commands applied, the arm moves, the held object follows.
 
         Returns:
-            (a trajectory ended, why delayed commands were rejected).
+            (a whole trajectory ended, why delayed commands were rejected). The end of a
+            streamed reference (closed loop, one per control tick) is counted in
+            :attr:`references_reached` instead: it is not an event a user acts on (#26).
         """
         with self.lock:
             errors = self.drive.apply_due()
-            finished = self.sim.step()
+            reached = self.sim.step()
+            finished = reached and self.drive.applied_kind == 'trajectory'
+            self.references_reached += reached and not finished
             if self.world.attached_id is not None:
                 self.world.update(self.robot.ee_pose(self.sim.q))
         return finished, errors

@@ -71,7 +71,7 @@ def test_reset_scene_answers_bad_files(node: Any, tmp_path: Path, case: str) -> 
     response = _reset(node, path)
     assert not response.success
     assert f'{path}: {field}: ' in response.message and problem in response.message
-    assert node.scenario.name == 's1'
+    assert node.core.scenario.name == 's1'
 
 
 @pytest.mark.parametrize('case', list(BAD_FILES))
@@ -86,7 +86,7 @@ def test_scenario_parameter_rejects_bad_files(node: Any, tmp_path: Path, case: s
     assert not result.successful
     assert f'{path}: {field}: ' in result.reason and problem in result.reason
     assert node.get_parameter('scenario').value == 's1'
-    assert node.scenario.name == 's1'
+    assert node.core.scenario.name == 's1'
 
 
 def test_unexpected_loader_exception_is_answered(
@@ -104,9 +104,9 @@ def test_unexpected_loader_exception_is_answered(
     assert 'unexpected RuntimeError: loader bug on s2' in response.message
     (result,) = node.set_parameters([Parameter('scenario', value='s3')])
     assert not result.successful and 'RuntimeError' in result.reason
-    assert node.scenario.name == 's1'
+    assert node.core.scenario.name == 's1'
     monkeypatch.undo()
-    assert _reset(node, 's2').success and node.scenario.name == 's2'
+    assert _reset(node, 's2').success and node.core.scenario.name == 's2'
 
 
 def _raw_trajectory(n: int, velocities: bool = False) -> bytes:
@@ -147,12 +147,12 @@ def test_trajectory_point_limit(node: Any, rejections: list[str]) -> None:
     assert node.get_parameter('max_trajectory_points').value == 10_000
     assert node.set_parameters([Parameter('max_trajectory_points', value=50)])[0].successful
     node._on_raw_trajectory(_raw_trajectory(51))
-    assert not node.sim.active
+    assert not node.core.sim.active
     assert rejections == [
         '51 points, more than max_trajectory_points = 50 (split it or raise the parameter)'
     ]
     node._on_raw_trajectory(_raw_trajectory(50, velocities=True))
-    assert node.sim.active and len(rejections) == 1
+    assert node.core.sim.active and len(rejections) == 1
 
 
 @pytest.mark.parametrize('value', [0, 100_001])
@@ -169,7 +169,7 @@ def test_oversized_trajectory_rejected_unread(node: Any, rejections: list[str]) 
     node._on_raw_trajectory(raw)
     seconds = time.process_time() - start
     assert rejections and 'max_trajectory_points = 10000' in rejections[0]
-    assert not node.sim.active
+    assert not node.core.sim.active
     assert seconds < 0.02, f'rejecting took {seconds:.3f} s: the message was deserialised'
 
 
@@ -178,11 +178,11 @@ def test_trajectory_at_the_limit_is_followed_quickly(node: Any, rejections: list
     start = time.process_time()
     node._on_raw_trajectory(raw)
     seconds = time.process_time() - start
-    assert node.sim.active and not rejections
+    assert node.core.sim.active and not rejections
     assert seconds < 0.5  # about 0.08 s here, mostly rclpy deserialisation
 
 
 def test_garbage_bytes_are_rejected(node: Any, rejections: list[str]) -> None:
     node._on_raw_trajectory(b'\x00\x01\x00\x00\xff')
     node._on_raw_trajectory(_raw_trajectory(3)[:40])
-    assert len(rejections) == 2 and not node.sim.active
+    assert len(rejections) == 2 and not node.core.sim.active

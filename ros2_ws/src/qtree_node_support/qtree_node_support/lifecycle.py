@@ -9,9 +9,14 @@ and SIGTERM, every time; an exception while the context is still valid is a real
 propagates (exit code 1, with its traceback).
 
 In a process of its own the node's SIGINT and SIGTERM are Python handlers (rclpy's own signal
-handler is not installed) and the executor spins in steps of ``SPIN_POLL_S``, so a signal always
-ends the spin loop within that time: with rclpy's handler and ``executor.spin()``, 2 of 10 soak
-runs had a node still spinning 10 s after its SIGINT (stacks dumped: the main thread waiting in
+handler is not installed) that only record the request in :class:`StopRequest` and never raise
+(#26): an exception raised from a signal handler lands wherever the main thread happens to be,
+and inside ``rclpy.task.Future.__del__``, a weakref callback or a ``finally:`` it is printed as
+"Exception ignored in" and dropped, so the node never stopped and was killed (seen in
+``test_motion_planner_absent_or_dying``). The executor spins in steps of ``SPIN_POLL_S`` and the
+loop checks the request after each step, so a signal always ends the spin loop within that
+time: with rclpy's handler and ``executor.spin()``, 2 of 10 soak runs had a node still
+spinning 10 s after its SIGINT (stacks dumped: the main thread waiting in
 ``wait_for_ready_callbacks``), killed with SIGKILL.
 
 Two guards against a stop that hangs: ``SIGUSR1`` dumps every thread's stack to stderr (the
@@ -47,6 +52,26 @@ EXIT_WATCHDOG_S = 3.0  # longest wait for the interpreter to exit once cleaned u
 EXIT_OK, EXIT_STARTUP = 0, 2
 
 
+class StopRequest:
+    """The stop asked for by SIGINT / SIGTERM: a flag the spin loop reads, set by the handler.
+
+    Setting a class attribute is atomic and cannot fail, so the handler is safe wherever the
+    signal lands (inside a destructor, a weakref callback, a lock release, a ``finally:``).
+    """
+
+    signal_name: str | None = None
+
+    @classmethod
+    def requested(cls) -> bool:
+        """Whether a SIGINT or SIGTERM arrived since the last :meth:`clear`."""
+        return cls.signal_name is not None
+
+    @classmethod
+    def clear(cls) -> None:
+        """Forget an earlier request (a new run in the same process)."""
+        cls.signal_name = None
+
+
 def shutting_down(context: Context, grace_s: float = SHUTDOWN_GRACE_S) -> bool:
     """Whether ``context`` is shut down, waiting up to ``grace_s`` [s] for it to become so."""
     deadline = time.monotonic() + grace_s
@@ -67,6 +92,7 @@ def run_node(
     startup_errors: tuple[type[BaseException], ...] = (),
     context: Context | None = None,
     name: str = 'node',
+    exit_watchdog: bool = True,
 ) -> int:
     """Initialise rclpy, build the node, spin it until shutdown, clean up; return the exit code.
 
@@ -80,6 +106,8 @@ def run_node(
             as fatal, exit code 2.
         context: the rclpy context (default: the global one); tests pass a private one.
         name: logger name of the fatal start-up message.
+        exit_watchdog: in a process of its own, force the exit once cleaned up (see the module
+            docstring); in-process test harnesses that run many nodes in turn pass False.
 
     Returns:
         0 after SIGINT, SIGTERM or another shutdown of the context; 2 on a startup error.
@@ -94,8 +122,9 @@ def run_node(
     )
     if own_process:
         faulthandler.register(signal.SIGUSR1, all_threads=True)
-        signal.signal(signal.SIGINT, _interrupt)
-        signal.signal(signal.SIGTERM, _interrupt)
+        StopRequest.clear()
+        signal.signal(signal.SIGINT, _request_stop)
+        signal.signal(signal.SIGTERM, _request_stop)
         rclpy.init(args=args, context=context, signal_handler_options=SignalHandlerOptions.NO)
     else:
         rclpy.init(args=args, context=context)
@@ -106,7 +135,7 @@ def run_node(
         node = make_node()
         executor = (make_executor or (lambda c: SingleThreadedExecutor(context=c)))(context)
         executor.add_node(node)
-        while context.ok():  # back in Python every SPIN_POLL_S: a pending signal is handled
+        while context.ok() and not StopRequest.requested():  # checked every SPIN_POLL_S
             executor.spin_once(timeout_sec=SPIN_POLL_S)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
@@ -120,7 +149,7 @@ def run_node(
             raise
     finally:
         _quietly(context, cleanup and node and (lambda: cleanup(node)))  # data saved first
-        if own_process:  # bound the exit of the process
+        if own_process and exit_watchdog:  # bound the exit of the process
             start_exit_watchdog(code, EXECUTOR_SHUTDOWN_S + EXIT_WATCHDOG_S)
         _quietly(context, executor and (lambda: executor.shutdown(EXECUTOR_SHUTDOWN_S)))
         _quietly(context, node and node.destroy_node)
@@ -128,9 +157,9 @@ def run_node(
     return code
 
 
-def _interrupt(signum: int, frame: Any) -> None:
-    """SIGINT / SIGTERM: end the spin loop of :func:`run_node` (raised in the main thread)."""
-    raise KeyboardInterrupt(signal.Signals(signum).name)
+def _request_stop(signum: int, frame: Any) -> None:
+    """SIGINT / SIGTERM: ask the spin loop of :func:`run_node` to stop; never raises (#26)."""
+    StopRequest.signal_name = signal.Signals(signum).name
 
 
 def start_exit_watchdog(code: int, timeout_s: float = EXIT_WATCHDOG_S) -> threading.Thread:

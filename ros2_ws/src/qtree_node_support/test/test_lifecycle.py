@@ -146,3 +146,64 @@ def test_a_signal_stops_an_idle_node_even_if_rclpys_handler_misses_it(sig: str, 
     finally:
         process.kill()
         process.wait()
+
+
+DEL_SCRIPT = """
+import os
+import signal
+import sys
+import time
+import rclpy
+from qtree_node_support.lifecycle import run_node
+
+
+class SignalsInDestructor:
+    def __del__(self):  # the signal handler runs inside this destructor
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)
+
+
+def make_node():
+    node = rclpy.create_node('del_node')
+    node.create_timer(0.05, lambda: SignalsInDestructor())  # dropped at once: __del__ runs
+    print('ready', flush=True)
+    return node
+
+
+sys.exit(run_node(make_node))
+"""
+
+
+def test_a_signal_landing_in_a_destructor_still_stops_the_node() -> None:
+    """#26: the old handler raised KeyboardInterrupt inside ``__del__``; it was dropped there."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, ROS_DOMAIN_ID='232', ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    process = subprocess.Popen(
+        [sys.executable, '-c', DEL_SCRIPT],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    try:
+        assert process.stdout.readline().strip() == 'ready'
+        assert process.wait(timeout=20.0) == 0
+        assert 'Exception ignored' not in process.stderr.read()
+    finally:
+        process.kill()
+        process.wait()
+
+
+def test_the_stop_handler_records_the_signal_and_never_raises() -> None:
+    import signal
+
+    from qtree_node_support import lifecycle
+
+    lifecycle.StopRequest.clear()
+    assert not lifecycle.StopRequest.requested()
+    lifecycle._request_stop(signal.SIGTERM, None)  # would raise KeyboardInterrupt before #26
+    assert lifecycle.StopRequest.signal_name == 'SIGTERM' and lifecycle.StopRequest.requested()
+    lifecycle.StopRequest.clear()

@@ -13,6 +13,7 @@ import sys
 import time
 from datetime import datetime
 from pathlib import Path
+from typing import Any
 
 from qtree_node_support.lifecycle import run_node
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
@@ -136,9 +137,13 @@ class RecorderNode(Node):
             print(f'[{"ERROR" if failed else "INFO"}] [recorder]: {line}', file=sys.stderr)
 
 
-def main(args: list[str] | None = None) -> None:
-    """Record until SIGINT/SIGTERM, finish the file, exit 0."""
-    sys.exit(run_node(RecorderNode, args=args, cleanup=RecorderNode.finish))
+def run(args: list[str] | None = None, **options: Any) -> int:
+    """Record until SIGINT/SIGTERM, finish the file: 0."""
+    return run_node(RecorderNode, args=args, cleanup=RecorderNode.finish, **options)
+
+
+def main(args: list[str] | None = None) -> None:  # the console script
+    sys.exit(run(args))
 
 
 if __name__ == '__main__':

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import sys
 import threading
+from typing import Any
 
 from qtree_msgs.action import RetrieveTarget
 from qtree_msgs.msg import QTree as QTreeMsg
@@ -126,11 +127,16 @@ class TaskPlannerNode(Node):
         return msg
 
 
-def main(args: list[str] | None = None) -> None:
-    """Run the node until SIGINT/SIGTERM (exit code 0); a running training ends at once."""
+def run(args: list[str] | None = None, **options: Any) -> int:
+    """Run the node until SIGINT/SIGTERM (0); a running training ends at once."""
     executor = lambda context: MultiThreadedExecutor(4, context=context)  # noqa: E731
     cleanup = lambda node: node.stopping.set()  # noqa: E731 - frees the training's thread
-    sys.exit(run_node(TaskPlannerNode, args=args, make_executor=executor, cleanup=cleanup))
+    return run_node(TaskPlannerNode, args=args, make_executor=executor, cleanup=cleanup, **options)
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point: exit with the code of :func:`run`."""
+    sys.exit(run(args))
 
 
 if __name__ == '__main__':

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import sys
 import time
+from typing import Any
 
 from qtree_msgs.msg import PlanningEvent, Scene
 from qtree_msgs.srv import RelocateObject
@@ -95,10 +96,15 @@ class MotionPlannerNode(Node):
         return response
 
 
-def main(args: list[str] | None = None) -> None:
-    """Run the node until SIGINT/SIGTERM (exit code 0)."""
+def run(args: list[str] | None = None, **options: Any) -> int:
+    """Run the node until SIGINT/SIGTERM (0)."""
     executor = lambda context: MultiThreadedExecutor(EXECUTOR_THREADS, context=context)  # noqa: E731
-    sys.exit(run_node(MotionPlannerNode, args=args, make_executor=executor))
+    return run_node(MotionPlannerNode, args=args, make_executor=executor, **options)
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point: exit with the code of :func:`run`."""
+    sys.exit(run(args))
 
 
 if __name__ == '__main__':
