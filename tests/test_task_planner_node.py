@@ -10,6 +10,7 @@ MOTION_PLANNER_UNAVAILABLE and keeps the statistics so far.
 from __future__ import annotations
 
 import functools
+import time
 from typing import Any
 
 import pytest
@@ -164,6 +165,9 @@ def test_cancel_stops_training(launch, ros_node) -> None:
     assert 3 <= result.episodes < 5000 and result.mp_calls > 0
 
 
+DEAD_PLANNER_REPORT_S = 5.0  # one 3 s time-out + goal delivery; two time-outs take > 6 s [s]
+
+
 def test_motion_planner_absent_or_dying(launch, ros_node) -> None:
     from action_msgs.msg import GoalStatus
     from qtree_msgs.action import RetrieveTarget
@@ -179,9 +183,14 @@ def test_motion_planner_absent_or_dying(launch, ros_node) -> None:
     mp.wait_for_log('ready', timeout_s=READY_TIMEOUT_S)
     handle = runner.send(policy='LRND', seed=4, steady_episodes=1_000_000, feedback_every=1)
     assert ros_node.spin_until(lambda: len(runner.feedback) >= 2, 120.0), 'no feedback'
+    killed = time.monotonic()
     mp.kill()
     status, result = runner.result(handle, 60.0)
+    reported_s = time.monotonic() - killed
+    print(f'dead planner reported in {reported_s:.2f} s')
     assert status == GoalStatus.STATUS_ABORTED and result.error_code == code
-    assert 'no answer' in result.message
+    assert '/relocate_object: no answer in 3.0 s' in result.message
+    # one 3 s answer time-out (#26: was two, 6.1 s and more); see docs/RELIABILITY.md
+    assert reported_s < DEAD_PLANNER_REPORT_S, reported_s
     assert result.episodes >= 2 and result.mp_calls > 0
     assert nodes['tp'].alive()

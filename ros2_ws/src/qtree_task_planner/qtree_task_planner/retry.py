@@ -4,8 +4,9 @@ A busy motion planner (PLANNER_BUSY), a planning time-out (TIMEOUT: the time lim
 usually because the machine was loaded; the planner does not cache it) and a reply lost in
 transport are not answers about feasibility: learning them as -1 (eq. 8) makes the tree wrong.
 The oracle asks again after ``delay(k)`` seconds for the k-th retry, at most ``retries`` times
-(a lost reply at most ``missing_retries`` times: each costs a whole call time-out), then gives up
-and the goal aborts with MOTION_PLANNER_UNAVAILABLE.
+then gives up and the goal aborts with MOTION_PLANNER_UNAVAILABLE. A reply that does not come is
+asked again ``missing_retries`` times within the same call time-out (#26): a dead planner is
+reported after one time-out.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ class Backoff:
 
     Attributes:
         retries: most retries of a busy / timed-out answer [-].
-        missing_retries: most retries of a reply that never came [-].
+        missing_retries: copies of a question sent again within its time-out if no reply [-].
         first_s: delay before the first retry [s].
         cap_s: longest delay between two attempts [s].
     """
