@@ -131,8 +131,11 @@ def test_closed_loop_removes_a_joint_offset_open_loop_does_not(launch, ros_node,
     # The hand, not the placement: with a constant joint offset the hand is off at the grasp and
     # at the release alike, and the two can nearly cancel in the placement (3.7-4.1 mm on
     # today's plan of T, 20 mm on an earlier one); the hand at rest stays off by the offset.
+    # Thresholds with a 2x margin over what was measured (docs/RELIABILITY.md): the closed loop
+    # settles within 1 mm (settle_tolerance_m; 0.0 mm measured, was 5.07 mm under load before
+    # #26), the open loop keeps the offset (15.6 mm measured).
     assert closed_hand < 0.005
-    assert open_hand > 0.015
+    assert open_hand > 0.0075
     assert sim.alive() and mp.alive()
 
 

@@ -46,7 +46,10 @@ from stpik_motion_planner.stpik import Stpik
 from stpik_motion_planner.tasks import EePoseTask, Kinematics, PostureTask, TaskRows
 from stpik_motion_planner.tasks.ee_pose_task import pose_error
 
-SETTLE_SMOOTHING = 0.2  # weight of the newest error in the settling average [-]
+# A segment is done once the EE error stayed within the settle tolerance this long [s] (#26):
+# done at the first tick within it (a smoothed error), the hand of a lagging arm (50 ms latency)
+# went on to the leading reference and came to rest 5-9 mm from the plan.
+SETTLE_HOLD_S = 0.2
 # The carried object's collision body is this much shorter at each end [m]: the plan sets it
 # down ON the table (the planner shortens it by its margin + 2 mm), so the executor leaves room
 # for a few mm of overshoot there; sideways margins are unchanged.
@@ -267,7 +270,7 @@ class ClosedLoopController:
         self._motion: PlannedMotion | None = None
         self._t = self._t_end = 0.0
         self._settle_s = 0.0
-        self._settle_error = np.inf
+        self._held_s = 0.0
         self._stalled_s = 0.0
 
     def set_scene(self, scene: SceneWorld) -> None:
@@ -289,7 +292,7 @@ class ClosedLoopController:
         self._t, self._t_end = float(motion.times[start]), float(motion.times[end])
         self.q_ref = np.array(q_ref, dtype=float)
         self.phase = 'tracking'
-        self._settle_s, self._settle_error = 0.0, np.inf
+        self._settle_s = self._held_s = 0.0
         self._stalled_s = 0.0
 
     def step(self, q_meas: np.ndarray) -> ControlTick:
@@ -379,11 +382,9 @@ class ClosedLoopController:
             self.phase = 'settling'
         if self.phase != 'settling':
             return
-        a = SETTLE_SMOOTHING
-        scaled = max(error_m / c.settle_tolerance_m, error_rad / c.settle_tolerance_rad)
-        previous = self._settle_error if np.isfinite(self._settle_error) else scaled
-        self._settle_error = a * scaled + (1 - a) * previous
-        if self._settle_error <= 1.0:
+        within = error_m <= c.settle_tolerance_m and error_rad <= c.settle_tolerance_rad
+        self._held_s = self._held_s + c.period if within else 0.0
+        if self._held_s >= SETTLE_HOLD_S:  # at rest on the plan, not passing through it
             self.phase = 'done'
             return
         self._settle_s += c.period

@@ -68,7 +68,7 @@ class ExecutionConfig:
     max_tracking_error_m: float = 0.05
     max_tracking_error_rad: float = 0.3
     slow_down_error_m: float = 0.005
-    settle_tolerance_m: float = 0.002
+    settle_tolerance_m: float = 0.001  # 1 mm, well under the tests' 5 mm (#26)
     settle_tolerance_rad: float = 0.02
     settle_timeout_s: float = 3.0
     max_lead_rad: float = 0.2
