@@ -5,7 +5,14 @@ optionally the whole suite under a CPU hog on both cores. Writes benchmarks/resu
 
 Thin entry point over :mod:`soaking` (scripts/soaking.py).
 
+With ``--fresh-clone`` (#26) it instead clones ``main`` into a temporary directory and runs the
+README's ``./qtree test`` there exactly as written, ``--runs`` times in a row (the first run sets
+the clone up from scratch), while ``--load`` busy processes hold that many cores; it updates only
+the ``fresh_clone_*``, ``loaded``, ``load_processes`` and ``commit`` keys of soak.json, so the
+node-stop figures of the other mode stay.
+
 Examples:
+    ./qtree run python scripts/soak.py --fresh-clone --runs 10 --load 1
     ./qtree run python scripts/soak.py --runs 10 --stops 50
     ./qtree run python scripts/soak.py --runs 0 --stops 0 --hog-runs 1   # suite under a CPU hog
 """
@@ -13,6 +20,7 @@ Examples:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import platform
@@ -27,6 +35,7 @@ from soaking import (
     SIGNALS,
     cpu_hog,
     default_work_dir,
+    repeat_fresh_clone,
     repeat_tests,
     repeat_tests_parallel,
     stop_rounds,
@@ -48,11 +57,16 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     parser.add_argument('--hog-runs', type=int, default=0, help='whole-suite runs under a hog')
     parser.add_argument('--hog-processes', type=int, default=2, help='busy loops (2 = 2 cores)')
+    parser.add_argument(
+        '--fresh-clone', action='store_true', help="the README's ./qtree test on a fresh clone"
+    )
+    parser.add_argument('--load', type=int, default=0, help='busy processes while soaking')
+    parser.add_argument('--branch', default='main', help='branch cloned by --fresh-clone')
     parser.add_argument('--output', type=Path, default=DEFAULT_OUTPUT, help='JSON result file')
     args = parser.parse_args(argv)
     if args.parallel < 1:
         parser.error('--parallel must be >= 1')
-    for name in ('runs', 'stops', 'hog_runs', 'hog_processes'):
+    for name in ('runs', 'stops', 'hog_runs', 'hog_processes', 'load'):
         if getattr(args, name) < 0:
             parser.error(f'--{name.replace("_", "-")} must be >= 0')
     return args
@@ -75,8 +89,36 @@ def _commit() -> str:
         return ''
 
 
+def fresh_clone_main(args: argparse.Namespace) -> int:
+    """``--fresh-clone``: the README's test command on a fresh clone, soak.json updated."""
+    work = default_work_dir()
+    previous = json.loads(args.output.read_text()) if args.output.is_file() else {}
+    with (
+        cpu_hog(args.load) if args.load else contextlib.nullcontext(),
+        tqdm(total=args.runs, desc=f'./qtree test on a fresh clone of {args.branch}') as bar,
+    ):
+        fresh = repeat_fresh_clone(args.runs, work / 'fresh', _progress(bar), args.branch)
+    previous.update(fresh)
+    previous.update(
+        loaded=args.load > 0,
+        load_processes=args.load,
+        fresh_clone_date_utc=time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
+        fresh_clone_work_dir=str(work / 'fresh'),
+    )
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    args.output.write_text(json.dumps(previous, indent=2) + '\n')
+    print(
+        f'fresh clone {fresh["commit"][:10]}: {fresh["fresh_clone_passed"]}/{args.runs} runs of '
+        f'./qtree test green ({"loaded, " + str(args.load) + " busy" if args.load else "idle"}); '
+        f'failed: {fresh["fresh_clone_failed_tests"] or "none"}; written {args.output}'
+    )
+    return 0 if fresh['fresh_clone_passed'] == args.runs else 1
+
+
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
+    if args.fresh_clone:
+        return fresh_clone_main(args)
     work = default_work_dir()
     result: dict = {
         'date_utc': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),

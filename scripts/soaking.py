@@ -14,6 +14,7 @@ import contextlib
 import multiprocessing as mp
 import os
 import random
+import re
 import signal
 import subprocess
 import sys
@@ -217,6 +218,90 @@ def repeat_tests_parallel(
         'exit_codes': [c for p in parts for c in p['exit_codes']],
         'run_seconds': [t for p in parts for t in p['run_seconds']],
         'sequences': sequences,
+    }
+
+
+FRESH_CLONE_COMMAND = ['./qtree', 'test']  # the README's test command, verbatim
+SUMMARY_LINE = re.compile(r'^(?:FAILED|ERROR) (\S+?)(?: - |$)')
+
+
+def clean_environment() -> dict[str, str]:
+    """The environment of a new login shell: no venv, ROS or Python path of this one."""
+    keep = ('HOME', 'USER', 'LANG', 'LC_ALL', 'TERM', 'TMPDIR')
+    env = {k: os.environ[k] for k in keep if k in os.environ}
+    env['PATH'] = '/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin'
+    return env
+
+
+def summary_failures(output: str) -> list[str]:
+    """Test ids named FAILED or ERROR in pytest's short summary of ``output``."""
+    return [m.group(1) for line in output.splitlines() if (m := SUMMARY_LINE.match(line))]
+
+
+def fresh_clone(work_dir: Path, branch: str = 'main') -> Path:
+    """Clone ``branch`` of this repository into ``work_dir/qtree-tamp`` with ``../shared`` beside
+    it (a symbolic link to this checkout's), as CI has it; the clone's path."""
+    clone = work_dir / 'qtree-tamp'
+    subprocess.run(
+        ['git', 'clone', '--quiet', '--branch', branch, '--single-branch', str(REPO_ROOT), clone],
+        check=True,
+    )
+    shared = REPO_ROOT.parent / 'shared'
+    if shared.exists():
+        (work_dir / 'shared').symlink_to(shared.resolve())
+    return clone
+
+
+def repeat_fresh_clone(
+    runs: int,
+    work_dir: Path,
+    progress: Callable[[int, list[str]], Any] | None = None,
+    branch: str = 'main',
+) -> dict[str, Any]:
+    """Run the README's ``./qtree test`` ``runs`` times in a row on a fresh clone of ``branch``.
+
+    The first run sets the clone up from scratch (as on a new machine); each run's output is
+    kept in ``work_dir/fresh_run_<i>.log``.
+
+    Returns:
+        ``fresh_clone_runs``, ``fresh_clone_passed``, ``fresh_clone_failed_tests`` (test id →
+        runs it failed in), ``fresh_clone_exit_codes``, ``fresh_clone_run_seconds`` and
+        ``commit`` (of the clone).
+    """
+    work_dir.mkdir(parents=True, exist_ok=True)
+    clone = fresh_clone(work_dir, branch)
+    commit = subprocess.run(
+        ['git', 'rev-parse', 'HEAD'], cwd=clone, capture_output=True, text=True
+    ).stdout.strip()
+    failures: Counter[str] = Counter()
+    passed, seconds, codes = 0, [], []
+    for i in range(runs):
+        start = time.monotonic()
+        done = subprocess.run(
+            FRESH_CLONE_COMMAND,
+            cwd=clone,
+            env=clean_environment(),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
+        seconds.append(round(time.monotonic() - start, 1))
+        (work_dir / f'fresh_run_{i}.log').write_text(done.stdout)
+        failed = summary_failures(done.stdout)
+        if done.returncode != 0 and not failed:
+            failed = [f'<exit code {done.returncode}, no test named: see fresh_run_{i}.log>']
+        codes.append(done.returncode)
+        passed += done.returncode == 0
+        failures.update(failed)
+        if progress is not None:
+            progress(i, failed)
+    return {
+        'fresh_clone_runs': runs,
+        'fresh_clone_passed': passed,
+        'fresh_clone_failed_tests': dict(failures),
+        'fresh_clone_exit_codes': codes,
+        'fresh_clone_run_seconds': seconds,
+        'commit': commit,
     }
 
 

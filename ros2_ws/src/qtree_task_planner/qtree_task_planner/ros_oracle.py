@@ -24,6 +24,8 @@ from qtree_task_planner.oracle import (
 )
 from qtree_task_planner.retry import Backoff
 
+COPY_AFTER = 0.8  # share of the answer time-out after which a question is sent again [-]
+
 
 def wait_for_future(future: rclpy.task.Future, timeout_s: float, stop: Any) -> bool:
     """Block this thread until ``future`` is done (another executor thread completes it).
@@ -160,10 +162,12 @@ class RosPlannerOracle:
         """One answer to ``request`` within one call time-out, or None (#26).
 
         A reply lost in transport is covered inside the same time-out: the request is sent
-        again at ``k / (missing_retries + 1)`` of it (k = 1, 2, ...) and the first real answer
-        of any copy is taken (a PLANNER_BUSY answer to a copy means the first one is being
-        planned: ignored while the first is pending). A dead planner is thus reported after
-        one time-out, not one per retry (was 10.2 s with two 5 s waits).
+        again ``missing_retries`` times late in it (from :data:`COPY_AFTER` of it on, when a
+        planner that finished answers a copy from its cache in milliseconds; earlier copies
+        would double the work of a planner that is merely slow on a loaded machine) and the
+        first real answer of any copy is taken (a PLANNER_BUSY answer to a copy means the first
+        one is being planned: ignored while the first is pending). A dead planner is thus
+        reported after one time-out, not one per retry (was 10.2 s with two 5 s waits).
 
         Raises:
             OracleUnavailableError: the node is shutting down.
@@ -171,6 +175,8 @@ class RosPlannerOracle:
         busy = RelocateObject.Response.PLANNER_BUSY
         start = time.monotonic()
         copies = self.backoff.missing_retries + 1
+        k = self.backoff.missing_retries
+        send_at = [self.timeout_s * (COPY_AFTER + (1 - COPY_AFTER) * j / k) for j in range(k)]
         futures = [self.client.call_async(request)]
         try:
             while True:
@@ -184,7 +190,7 @@ class RosPlannerOracle:
                 elapsed = time.monotonic() - start
                 if elapsed > self.timeout_s:
                     return None
-                if len(futures) < copies and elapsed > self.timeout_s * len(futures) / copies:
+                if len(futures) < copies and elapsed > send_at[len(futures) - 1]:
                     futures.append(self.client.call_async(request))
                     self.retries += 1
                 if self.stop.wait(0.01):

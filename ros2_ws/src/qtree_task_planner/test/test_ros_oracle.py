@@ -88,7 +88,7 @@ def test_a_dead_planner_is_reported_within_one_timeout_naming_the_service() -> N
     with pytest.raises(OracleUnavailableError, match=r'/relocate_object: no answer in 0\.4 s'):
         oracle.feasible((), 'O1')
     elapsed = time.monotonic() - start
-    assert 0.4 <= elapsed < 0.6 and len(silent.requests) == 2  # the copy at 0.2 s, one wait
+    assert 0.4 <= elapsed < 0.75 and len(silent.requests) == 2  # the copy at 0.32 s, one wait
 
 
 def test_a_busy_answer_to_the_copy_does_not_replace_the_pending_first() -> None:
@@ -99,8 +99,8 @@ def test_a_busy_answer_to_the_copy_does_not_replace_the_pending_first() -> None:
     client.call_async = lambda request: calls.pop(0) if calls else original(request)
     import threading
 
-    threading.Timer(0.3, lambda: first.set_result(Response(feasible=True, reason=0))).start()
-    oracle = RosPlannerOracle(client, 0.5, 1.0, backoff=FAST)
+    threading.Timer(0.9, lambda: first.set_result(Response(feasible=True, reason=0))).start()
+    oracle = RosPlannerOracle(client, 1.0, 1.0, backoff=FAST)  # the copy at 0.8 s
     assert oracle.feasible((), 'O1') is True and oracle.retries == 1
 
 
