@@ -196,6 +196,8 @@ class RobotBodies:
         self._radii = np.array([_sphere_radius(g) for g in self._geometries])
         self._centres = np.zeros((len(self.bodies) + 1, 3))  # last row: the carried object
         self.attached: fcl.CollisionObject | None = None
+        # What is carried (object, pose in the EE frame, settle), hashable: None when nothing.
+        self.attach_key: tuple | None = None
         self.attached_radius = 0.0  # bounding radius of the carried object [m]
         self._attached_offset = pin.SE3.Identity()
         self._transforms.append(fcl.Transform())  # the carried object's
@@ -251,12 +253,14 @@ class RobotBodies:
         self.attached_radius = math.hypot(across, height / 2)
         self.attached = fcl.CollisionObject(geometry, fcl.Transform())
         self._attached_offset = transform_obj_to_ee
+        self.attach_key = (obj, transform_obj_to_ee.homogeneous.tobytes(), float(settle_m))
         self._build_managers()
 
     def detach(self) -> None:
         """Stop carrying the attached object."""
         if self.attached is not None:
             self.attached = None
+            self.attach_key = None
             self._build_managers()
 
     def place(self, oMg: list[pin.SE3], world_ee: pin.SE3) -> None:
@@ -312,6 +316,45 @@ class RobotBodies:
                 pa, pb = result.nearest_points
                 found.append(Proximity(name_a, name_b, distance, pa, pb))
         return found
+
+    def self_clear(self, threshold: float) -> bool:
+        """True when every self-hit pair is more than ``threshold`` [m] apart (validity checks).
+
+        Same pairs, bounding-sphere cull and ``fcl.distance`` as :meth:`self_proximities`, but
+        stops at the first pair at or below ``threshold`` and builds no :class:`Proximity`.
+        """
+        a, b = self._pair_a, self._pair_b
+        if a.size == 0:
+            return True
+        gap = np.linalg.norm(self._centres[a] - self._centres[b], axis=1)
+        gap -= self._all_radii[a] + self._all_radii[b]
+        for k in np.flatnonzero(gap <= threshold):
+            result = fcl.DistanceResult()
+            body_a, body_b = self._body(int(a[k])), self._body(int(b[k]))
+            if fcl.distance(body_a, body_b, _REQUEST, result) <= threshold:
+                return False
+        return True
+
+    def scene_clear(self, scene: SceneWorld, threshold: float) -> bool:
+        """True when every (body, scene object) pair is more than ``threshold`` [m] apart.
+
+        Same bound and ``fcl.distance`` as :meth:`scene_proximities`, first hit stops it.
+        """
+        if not scene.objects:
+            return True
+        index = self._scene_index
+        delta = self._centres[index][:, None, :] - scene.centres[None]  # (B, O, 3)
+        x = delta[..., 0] * scene.cos + delta[..., 1] * scene.sin
+        y = delta[..., 1] * scene.cos - delta[..., 0] * scene.sin
+        local = np.stack([x, y, delta[..., 2]], axis=-1)
+        outside = np.maximum(np.abs(local) - scene.half[None], 0.0)
+        bound = np.linalg.norm(outside, axis=-1) - self._all_radii[index][:, None]
+        for body, obj in zip(*np.nonzero(bound <= threshold), strict=True):
+            result = fcl.DistanceResult()
+            robot = self._body(int(index[body]))
+            if fcl.distance(robot, scene.bodies[obj], _REQUEST, result) <= threshold:
+                return False
+        return True
 
     def scene_proximities(self, scene: SceneWorld, threshold: float) -> list[Proximity]:
         """(body, scene object) pairs closer than ``threshold`` [m]; the base is skipped.

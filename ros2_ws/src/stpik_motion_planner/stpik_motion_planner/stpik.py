@@ -472,13 +472,8 @@ class Stpik:
                 raise PlanningTimeout.past(deadline, c.time_limit_s)
             # Collision checks only: placements without Jacobians (bit-identical to those of
             # kinematics), self pairs first, the scene only when no self pair is too close.
-            pin.forwardKinematics(self.model, self.data, q)
-            pin.updateFramePlacements(self.model, self.data)
-            pin.updateGeometryPlacements(
-                self.model, self.data, self.geometry_model, self.geometry_data
-            )
+            self.place_bodies(q)
             start = time.perf_counter()
-            self.bodies.place(self.geometry_data.oMg, self.data.oMf[self.ee_frame])
             found = self.bodies.self_proximities(c.self_activation_m)
             if not found:
                 hits = self.bodies.scene_proximities(scene, c.obstacle_activation_m)
@@ -490,6 +485,16 @@ class Stpik:
                 p = hits[0]
                 raise SceneCollision(p.name_a, p.name_b, p.distance)
         return out
+
+    def place_bodies(self, q: np.ndarray) -> None:
+        """Place the collision bodies at ``q`` [rad] (7,): forward kinematics, frame and
+        geometry placements, no Jacobians (collision-only checks of transits and RRTConnect)."""
+        pin.forwardKinematics(self.model, self.data, q)
+        pin.updateFramePlacements(self.model, self.data)
+        pin.updateGeometryPlacements(
+            self.model, self.data, self.geometry_model, self.geometry_data
+        )
+        self.bodies.place(self.geometry_data.oMg, self.data.oMf[self.ee_frame])
 
     def _check(
         self, k: Kinematics, index: int, target: pin.SE3, factor: float, active: list[str]
