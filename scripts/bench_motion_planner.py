@@ -42,7 +42,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--quick', action='store_true', help='short run (a few minutes)')
     parser.add_argument('--no-profile', action='store_true', help='skip the cProfile run')
+    parser.add_argument(
+        '--before',
+        type=Path,
+        help='an earlier motion_planner.json of the same questions: written as before_after',
+    )
     args = parser.parse_args()
+    before = json.loads(args.before.read_text()) if args.before else None
     quick = args.quick
     scenes = [load_scenario(n) for n in ('s1', 's2', 's3')]
     # layout='uniform': the generated scenes of the committed results (kept comparable).
@@ -125,11 +131,30 @@ def main() -> None:
         'scenes': rows,
         'wall_s': round(time.perf_counter() - wall_start, 1),
     }
+    if before is not None:
+        summary['before_after'] = _before_after(before, summary)
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / 'motion_planner.json').write_text(json.dumps(summary, indent=2) + '\n')
     markdown = report.render(summary) + report.notes(summary) + _step_note(summary)
     (OUT / 'motion_planner.md').write_text(markdown)
     print(markdown)
+
+
+def _before_after(before: dict, after: dict) -> dict:
+    """Timing figures and answer counts of an earlier run beside this one's."""
+    out: dict = {'load_average': [before.get('load_average'), after['load_average']]}
+    for group in ('all', 'reached_stpik', 'feasible'):
+        for key in ('n', 'median_ms', 'p95_ms', 'mean_ms'):
+            out[f'{group}.{key}'] = [
+                before['checks'].get(group, {}).get(key),
+                after['checks'][group][key],
+            ]
+    out['reasons'] = [before['checks'].get('reasons'), after['checks']['reasons']]
+    out['levels'] = [before.get('levels'), after['levels']]
+    out['same_answers'] = out['reasons'][0] == out['reasons'][1] and (
+        out['levels'][0] == out['levels'][1]
+    )
+    return out
 
 
 def _step_note(summary: dict) -> str:
@@ -144,6 +169,10 @@ def _step_note(summary: dict) -> str:
         f'(target 30) = solve {step.get("solve_median")} + kinematics '
         f'{step.get("kinematics_median")} + collision {step.get("collision_median")} µs '
         f'(medians of each part).\n'
+    ) + (
+        f'- before/after (same questions): {summary["before_after"]}\n'
+        if 'before_after' in summary
+        else ''
     )
 
 
