@@ -10,6 +10,7 @@ pairs a query of every pair would, and a query where nothing is near makes no fc
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -19,6 +20,8 @@ import pinocchio as pin
 from qtree_scene.scene import ObjectSpec
 
 _REQUEST = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
+_NO_DISTANCE = sys.float_info.max  # min_distance of an empty fcl.DistanceResult [m]
+
 # Links of the 7-DoF Jaco² (short names) in the groups whose cross pairs are all non-adjacent.
 _PROXIMAL = ('link_base', 'link_1', 'link_2', 'link_3')
 _DISTAL = ('link_5', 'link_6', 'link_7', 'finger', 'attached')
@@ -196,6 +199,7 @@ class RobotBodies:
         self._radii = np.array([_sphere_radius(g) for g in self._geometries])
         self._centres = np.zeros((len(self.bodies) + 1, 3))  # last row: the carried object
         self.attached: fcl.CollisionObject | None = None
+        self._result = fcl.DistanceResult()  # see _fresh_result
         # What is carried (object, pose in the EE frame, settle), hashable: None when nothing.
         self.attach_key: tuple | None = None
         self.attached_radius = 0.0  # bounding radius of the carried object [m]
@@ -284,6 +288,14 @@ class RobotBodies:
         object, valid while attached)."""
         return self._centres
 
+    def _fresh_result(self) -> fcl.DistanceResult:
+        """This instance's reused DistanceResult, emptied (#28: building one per query costs
+        about as much as a far pair's distance). fcl.distance keeps the smaller of its result
+        and the stored minimum, hence the reset; the nearest points are new arrays each time.
+        """
+        self._result.min_distance = _NO_DISTANCE
+        return self._result
+
     def _body(self, index: int) -> fcl.CollisionObject:
         """The fcl object of body ``index`` (the carried object: ``len(bodies)``), placed."""
         if not self._placed[index]:
@@ -308,7 +320,7 @@ class RobotBodies:
         gap -= self._all_radii[a] + self._all_radii[b]
         found: list[Proximity] = []
         for k in np.flatnonzero(gap < threshold):
-            result = fcl.DistanceResult()
+            result = self._fresh_result()
             body_a, body_b = self._body(int(a[k])), self._body(int(b[k]))
             distance = fcl.distance(body_a, body_b, _REQUEST, result)
             if distance < threshold:
@@ -329,7 +341,7 @@ class RobotBodies:
         gap = np.linalg.norm(self._centres[a] - self._centres[b], axis=1)
         gap -= self._all_radii[a] + self._all_radii[b]
         for k in np.flatnonzero(gap <= threshold):
-            result = fcl.DistanceResult()
+            result = self._fresh_result()
             body_a, body_b = self._body(int(a[k])), self._body(int(b[k]))
             if fcl.distance(body_a, body_b, _REQUEST, result) <= threshold:
                 return False
@@ -350,7 +362,7 @@ class RobotBodies:
         outside = np.maximum(np.abs(local) - scene.half[None], 0.0)
         bound = np.linalg.norm(outside, axis=-1) - self._all_radii[index][:, None]
         for body, obj in zip(*np.nonzero(bound <= threshold), strict=True):
-            result = fcl.DistanceResult()
+            result = self._fresh_result()
             robot = self._body(int(index[body]))
             if fcl.distance(robot, scene.bodies[obj], _REQUEST, result) <= threshold:
                 return False
@@ -375,7 +387,7 @@ class RobotBodies:
         bound = np.linalg.norm(outside, axis=-1) - self._all_radii[index][:, None]
         found: list[Proximity] = []
         for body, obj in zip(*np.nonzero(bound < threshold), strict=True):
-            result = fcl.DistanceResult()
+            result = self._fresh_result()
             robot = self._body(int(index[body]))
             distance = fcl.distance(robot, scene.bodies[obj], _REQUEST, result)
             if distance < threshold:
