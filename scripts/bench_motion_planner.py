@@ -42,7 +42,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--quick', action='store_true', help='short run (a few minutes)')
     parser.add_argument('--no-profile', action='store_true', help='skip the cProfile run')
+    parser.add_argument(
+        '--before',
+        type=Path,
+        help='an earlier motion_planner.json of the same questions: written as before_after',
+    )
     args = parser.parse_args()
+    before = json.loads(args.before.read_text()) if args.before else None
     quick = args.quick
     scenes = [load_scenario(n) for n in ('s1', 's2', 's3')]
     # layout='uniform': the generated scenes of the committed results (kept comparable).
@@ -55,6 +61,7 @@ def main() -> None:
     wall_start = time.perf_counter()
     verifier = TrajectoryVerifier(Jaco2Model())
     rows, results, peer_runs, checked = [], [], [], []
+    step_times: list[tuple[float, float, float]] = []  # per STPIK step (solve, kin., coll.) [s]
     for scene in tqdm(scenes, desc='scenes'):
         planner = MotionPlanner(scene)
         planner.blockers.annotate = lambda result, *_: result  # #14's blockers: not timed here
@@ -63,6 +70,7 @@ def main() -> None:
         stream = {'hits': planner.cache.hits, 'misses': planner.cache.misses}
         level, sets, queries = figures.optimal_level(planner, max_sets)
         scene_results = list(planner.cache._results.items())
+        step_times += planner.stpik.step_times
         results += [r for _, r in scene_results]
         planner_s = time.perf_counter() - start
         checked.append(verification.verify_results(scene, scene_results, verifier))
@@ -106,6 +114,7 @@ def main() -> None:
             'success_rate': stpik.get('success_with_clearance'),
         },
         'checks': figures.check_summary(results),
+        'stpik_step_us': _step_summary(step_times),
         'peers': peer_figures,
         'peer_settings': {
             'iterations_per_waypoint': peers.PEER_ITERATIONS,
@@ -122,11 +131,65 @@ def main() -> None:
         'scenes': rows,
         'wall_s': round(time.perf_counter() - wall_start, 1),
     }
+    if before is not None:
+        summary['before_after'] = _before_after(before, summary)
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / 'motion_planner.json').write_text(json.dumps(summary, indent=2) + '\n')
-    markdown = report.render(summary) + report.notes(summary)
+    markdown = report.render(summary) + report.notes(summary) + _step_note(summary)
     (OUT / 'motion_planner.md').write_text(markdown)
     print(markdown)
+
+
+def _before_after(before: dict, after: dict) -> dict:
+    """Timing figures and answer counts of an earlier run beside this one's."""
+    out: dict = {'load_average': [before.get('load_average'), after['load_average']]}
+    for group in ('all', 'reached_stpik', 'feasible'):
+        for key in ('n', 'median_ms', 'p95_ms', 'mean_ms'):
+            out[f'{group}.{key}'] = [
+                before['checks'].get(group, {}).get(key),
+                after['checks'][group][key],
+            ]
+    out['reasons'] = [before['checks'].get('reasons'), after['checks']['reasons']]
+    out['levels'] = [before.get('levels'), after['levels']]
+    out['same_answers'] = out['reasons'][0] == out['reasons'][1] and (
+        out['levels'][0] == out['levels'][1]
+    )
+    return out
+
+
+def _step_note(summary: dict) -> str:
+    """Markdown lines of the all-check percentiles and the per-step figures (issue #28)."""
+    every, step = summary['checks']['all'], summary['stpik_step_us']
+    return (
+        f'\n## Issue #28 figures\n\n'
+        f'- all checks: median {every["median_ms"]} ms, p95 {every["p95_ms"]} ms '
+        f'(target 50); feasible median {summary["checks"]["feasible"]["median_ms"]} ms '
+        f'(target 10); load average {summary["load_average"]}.\n'
+        f'- STPIK step (median over {step.get("steps", 0)} steps): {step.get("median")} µs '
+        f'(target 30) = solve {step.get("solve_median")} + kinematics '
+        f'{step.get("kinematics_median")} + collision {step.get("collision_median")} µs '
+        f'(medians of each part).\n'
+    ) + (
+        f'- before/after (same questions): {summary["before_after"]}\n'
+        if 'before_after' in summary
+        else ''
+    )
+
+
+def _step_summary(step_times: list[tuple[float, float, float]]) -> dict:
+    """Median wall time per STPIK step [µs] and its split (solve with the step bound,
+    kinematics without collision, collision queries), over every planner step of the run."""
+    if not step_times:
+        return {'steps': 0}
+    times = np.asarray(step_times) * 1e6
+    return {
+        'steps': len(times),
+        'median': round(float(np.median(times.sum(axis=1))), 1),
+        'p95': round(float(np.percentile(times.sum(axis=1), 95)), 1),
+        'solve_median': round(float(np.median(times[:, 0])), 1),
+        'kinematics_median': round(float(np.median(times[:, 1])), 1),
+        'collision_median': round(float(np.median(times[:, 2])), 1),
+    }
 
 
 def _speed_record() -> dict | None:

@@ -10,6 +10,7 @@ pairs a query of every pair would, and a query where nothing is near makes no fc
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -19,6 +20,8 @@ import pinocchio as pin
 from qtree_scene.scene import ObjectSpec
 
 _REQUEST = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
+_NO_DISTANCE = sys.float_info.max  # min_distance of an empty fcl.DistanceResult [m]
+
 # Links of the 7-DoF Jaco² (short names) in the groups whose cross pairs are all non-adjacent.
 _PROXIMAL = ('link_base', 'link_1', 'link_2', 'link_3')
 _DISTAL = ('link_5', 'link_6', 'link_7', 'finger', 'attached')
@@ -196,6 +199,9 @@ class RobotBodies:
         self._radii = np.array([_sphere_radius(g) for g in self._geometries])
         self._centres = np.zeros((len(self.bodies) + 1, 3))  # last row: the carried object
         self.attached: fcl.CollisionObject | None = None
+        self._result = fcl.DistanceResult()  # see _fresh_result
+        # What is carried (object, pose in the EE frame, settle), hashable: None when nothing.
+        self.attach_key: tuple | None = None
         self.attached_radius = 0.0  # bounding radius of the carried object [m]
         self._attached_offset = pin.SE3.Identity()
         self._transforms.append(fcl.Transform())  # the carried object's
@@ -251,12 +257,14 @@ class RobotBodies:
         self.attached_radius = math.hypot(across, height / 2)
         self.attached = fcl.CollisionObject(geometry, fcl.Transform())
         self._attached_offset = transform_obj_to_ee
+        self.attach_key = (obj, transform_obj_to_ee.homogeneous.tobytes(), float(settle_m))
         self._build_managers()
 
     def detach(self) -> None:
         """Stop carrying the attached object."""
         if self.attached is not None:
             self.attached = None
+            self.attach_key = None
             self._build_managers()
 
     def place(self, oMg: list[pin.SE3], world_ee: pin.SE3) -> None:
@@ -279,6 +287,14 @@ class RobotBodies:
         """Centre of every body [m] (G + 1, 3) at the last :meth:`place` (last row: the carried
         object, valid while attached)."""
         return self._centres
+
+    def _fresh_result(self) -> fcl.DistanceResult:
+        """This instance's reused DistanceResult, emptied (#28: building one per query costs
+        about as much as a far pair's distance). fcl.distance keeps the smaller of its result
+        and the stored minimum, hence the reset; the nearest points are new arrays each time.
+        """
+        self._result.min_distance = _NO_DISTANCE
+        return self._result
 
     def _body(self, index: int) -> fcl.CollisionObject:
         """The fcl object of body ``index`` (the carried object: ``len(bodies)``), placed."""
@@ -304,7 +320,7 @@ class RobotBodies:
         gap -= self._all_radii[a] + self._all_radii[b]
         found: list[Proximity] = []
         for k in np.flatnonzero(gap < threshold):
-            result = fcl.DistanceResult()
+            result = self._fresh_result()
             body_a, body_b = self._body(int(a[k])), self._body(int(b[k]))
             distance = fcl.distance(body_a, body_b, _REQUEST, result)
             if distance < threshold:
@@ -312,6 +328,45 @@ class RobotBodies:
                 pa, pb = result.nearest_points
                 found.append(Proximity(name_a, name_b, distance, pa, pb))
         return found
+
+    def self_clear(self, threshold: float) -> bool:
+        """True when every self-hit pair is more than ``threshold`` [m] apart (validity checks).
+
+        Same pairs, bounding-sphere cull and ``fcl.distance`` as :meth:`self_proximities`, but
+        stops at the first pair at or below ``threshold`` and builds no :class:`Proximity`.
+        """
+        a, b = self._pair_a, self._pair_b
+        if a.size == 0:
+            return True
+        gap = np.linalg.norm(self._centres[a] - self._centres[b], axis=1)
+        gap -= self._all_radii[a] + self._all_radii[b]
+        for k in np.flatnonzero(gap <= threshold):
+            result = self._fresh_result()
+            body_a, body_b = self._body(int(a[k])), self._body(int(b[k]))
+            if fcl.distance(body_a, body_b, _REQUEST, result) <= threshold:
+                return False
+        return True
+
+    def scene_clear(self, scene: SceneWorld, threshold: float) -> bool:
+        """True when every (body, scene object) pair is more than ``threshold`` [m] apart.
+
+        Same bound and ``fcl.distance`` as :meth:`scene_proximities`, first hit stops it.
+        """
+        if not scene.objects:
+            return True
+        index = self._scene_index
+        delta = self._centres[index][:, None, :] - scene.centres[None]  # (B, O, 3)
+        x = delta[..., 0] * scene.cos + delta[..., 1] * scene.sin
+        y = delta[..., 1] * scene.cos - delta[..., 0] * scene.sin
+        local = np.stack([x, y, delta[..., 2]], axis=-1)
+        outside = np.maximum(np.abs(local) - scene.half[None], 0.0)
+        bound = np.linalg.norm(outside, axis=-1) - self._all_radii[index][:, None]
+        for body, obj in zip(*np.nonzero(bound <= threshold), strict=True):
+            result = self._fresh_result()
+            robot = self._body(int(index[body]))
+            if fcl.distance(robot, scene.bodies[obj], _REQUEST, result) <= threshold:
+                return False
+        return True
 
     def scene_proximities(self, scene: SceneWorld, threshold: float) -> list[Proximity]:
         """(body, scene object) pairs closer than ``threshold`` [m]; the base is skipped.
@@ -332,7 +387,7 @@ class RobotBodies:
         bound = np.linalg.norm(outside, axis=-1) - self._all_radii[index][:, None]
         found: list[Proximity] = []
         for body, obj in zip(*np.nonzero(bound < threshold), strict=True):
-            result = fcl.DistanceResult()
+            result = self._fresh_result()
             robot = self._body(int(index[body]))
             distance = fcl.distance(robot, scene.bodies[obj], _REQUEST, result)
             if distance < threshold:

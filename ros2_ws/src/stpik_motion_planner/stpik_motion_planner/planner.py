@@ -199,6 +199,7 @@ class MotionPlanner:
         slot_yaw = drop_slots(self.scenario)[index].yaw
         centre = np.asarray(obj.position, dtype=float)
         failures: list[MotionPlannerError] = []
+        self.stpik.forget()  # deterministic results are shared by the two passes of one plan
         try:
             if yaws is None:
                 yaws = approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad)

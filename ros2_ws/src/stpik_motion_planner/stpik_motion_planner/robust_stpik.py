@@ -21,7 +21,8 @@ Every trajectory still passes the planner's independent verifier before it is re
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 import numpy as np
@@ -45,6 +46,68 @@ class RobustStpik(Stpik):
 
     fallbacks = True
 
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        # Deterministic results of this plan (#28): the fallback pass re-asks the plain pass's
+        # questions (same seed, target, scene, carried object) before it reaches new work.
+        self._memo: dict[tuple, tuple[bool, object, tuple]] = {}
+
+    def forget(self) -> None:
+        """Drop the remembered deterministic results (the planner calls it per plan)."""
+        self._memo.clear()
+
+    def _remembered(self, key: tuple, compute: Callable[[], np.ndarray]) -> np.ndarray:
+        """``compute()`` once per ``key``: its joint array (a copy) or its planner error again.
+
+        PlanningTimeout is never remembered (it depends on the clock, not on the question).
+        The error raised again is a copy with the original message (the planner prefixes the
+        phase to the message of the error it catches).
+        """
+        hit = self._memo.get(key)
+        if hit is None:
+            try:
+                value = compute()
+            except PlanningTimeout:
+                raise
+            except MotionPlannerError as err:
+                self._memo[key] = (False, err, err.args)
+                raise
+            self._memo[key] = (True, np.array(value, copy=True), ())
+            return value
+        ok, value, args = hit
+        if ok:
+            return np.array(value, copy=True)
+        again = type(value).__new__(type(value))
+        again.__dict__.update(value.__dict__)
+        again.args = args
+        raise again
+
+    def _key(self, name: str, scene: SceneWorld, *arrays: np.ndarray, extra: tuple = ()) -> tuple:
+        """Hashable identity of a deterministic question: arrays by value, the scene by its
+        objects, the carried object."""
+        return (
+            name,
+            *(np.asarray(a, dtype=float).tobytes() for a in arrays),
+            tuple(scene.objects.values()),
+            self.bodies.attach_key,
+            extra,
+        )
+
+    def _plain_converge(self, seed, target, scene, iterations, deadline) -> np.ndarray:
+        key = self._key('converge', scene, seed, target.homogeneous, extra=(iterations,))
+        return self._remembered(
+            key, lambda: Stpik.converge(self, seed, target, scene, iterations, deadline)
+        )
+
+    def track(self, q, samples, scene, tight, deadline=np.inf, reference=None):
+        """:meth:`Stpik.track`, remembered per plan (deterministic; see :meth:`forget`)."""
+        poses = np.array([s.homogeneous for s in samples])
+        ref = np.asarray(q if reference is None else reference, dtype=float)
+        key = self._key('track', scene, q, poses, ref, extra=tuple(bool(t) for t in tight))
+        return self._remembered(
+            key, lambda: Stpik.track(self, q, samples, scene, tight, deadline, reference)
+        )
+
     @property
     def has_fallbacks(self) -> bool:
         """Whether the config enables any fallback (restarts > 0 or an RRT budget)."""
@@ -66,7 +129,7 @@ class RobustStpik(Stpik):
             The first solve's error when every restart fails too; PlanningTimeout at once.
         """
         try:
-            return super().converge(seed, target, scene, iterations, deadline)
+            return self._plain_converge(seed, target, scene, iterations, deadline)
         except PlanningTimeout:
             raise
         except MotionPlannerError as err:
@@ -77,7 +140,7 @@ class RobustStpik(Stpik):
         low, high = np.maximum(self.lower, -math.pi), np.minimum(self.upper, math.pi * 2)
         for _ in range(int(self.config.ik_restarts)):
             try:
-                return super().converge(
+                return self._plain_converge(
                     rng.uniform(low, high), target, scene, iterations, deadline
                 )
             except PlanningTimeout:
@@ -89,13 +152,16 @@ class RobustStpik(Stpik):
     def transit(self, q_a, q_b, scene, deadline=np.inf):
         """Straight joint move, else RRTConnect in joint space (see the module docstring)."""
         try:
-            return super().transit(q_a, q_b, scene, deadline)
+            key = self._key('transit', scene, q_a, q_b)
+            return self._remembered(key, lambda: Stpik.transit(self, q_a, q_b, scene, deadline))
         except PlanningTimeout:
             raise
         except MotionPlannerError as err:
             if not self.fallbacks or self.config.rrt_transit_s <= 0.0:
                 raise
-            path = self.rrt(np.asarray(q_a, dtype=float), np.asarray(q_b, dtype=float), scene)
+            path = self.rrt(
+                np.asarray(q_a, dtype=float), np.asarray(q_b, dtype=float), scene, deadline
+            )
             if path is None:
                 raise err from None
             return path
@@ -104,17 +170,34 @@ class RobustStpik(Stpik):
         """Within the joint limits and the self-hit and scene safety margins."""
         if np.any(q < self.lower) or np.any(q > self.upper):
             return False
-        k = self.kinematics(q, scene)
+        # Collision only (#28): placements without Jacobians (bit-identical to those of
+        # kinematics), pairs up to the safety margins only, the first hit ends the check. Same
+        # answer as testing the pairs :meth:`kinematics` finds (every pair at or below the margin
+        # is among them), at a fraction of the cost.
         c = self.config
-        return all(p.distance > c.self_min_distance_m for p in k.self_pairs) and all(
-            p.distance > c.obstacle_min_distance_m for p in k.scene_pairs
+        self.place_bodies(q)
+        start = time.perf_counter()
+        clear = self.bodies.self_clear(c.self_min_distance_m) and self.bodies.scene_clear(
+            scene, c.obstacle_min_distance_m
         )
+        self.collision_time += time.perf_counter() - start
+        return clear
 
-    def rrt(self, q_a: np.ndarray, q_b: np.ndarray, scene: SceneWorld) -> np.ndarray | None:
+    def rrt(
+        self, q_a: np.ndarray, q_b: np.ndarray, scene: SceneWorld, deadline: float = np.inf
+    ) -> np.ndarray | None:
         """RRTConnect q_a → q_b [rad] (7,): samples after q_a up to q_b (n, 7), or None.
 
-        None at once when an end itself is invalid (OMPL would only report it on stderr).
+        None at once when an end itself is invalid (OMPL would only report it on stderr). The
+        search runs for ``config.rrt_transit_s`` [s] or until ``deadline`` (a
+        ``time.perf_counter()`` value), whichever comes first.
+
+        Raises:
+            PlanningTimeout: the deadline has passed (before the search or during it).
         """
+        budget = min(float(self.config.rrt_transit_s), deadline - time.perf_counter())
+        if budget <= 0.0:
+            raise PlanningTimeout.past(deadline, self.config.time_limit_s)
         if not (self.valid(q_a, scene) and self.valid(q_b, scene)):
             return None
         space = ob.RealVectorStateSpace(7)
@@ -139,8 +222,10 @@ class RobustStpik(Stpik):
             a[i], b[i] = float(q_a[i]), float(q_b[i])
         setup.setStartAndGoalStates(a, b)
         setup.setPlanner(og.RRTConnect(setup.getSpaceInformation()))
-        status = setup.solve(float(self.config.rrt_transit_s))
+        status = setup.solve(budget)
         if not setup.haveExactSolutionPath() or 'Exact' not in str(status):
+            if time.perf_counter() > deadline:
+                raise PlanningTimeout.past(deadline, self.config.time_limit_s)
             return None
         setup.simplifySolution(0.2)
         path = setup.getSolutionPath()

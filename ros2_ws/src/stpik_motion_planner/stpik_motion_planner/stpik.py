@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import deque
 from collections.abc import Sequence
 
 import numpy as np
@@ -39,6 +40,7 @@ from stpik_motion_planner.tasks import (
 )
 from stpik_motion_planner.tasks.ee_pose_task import pose_error
 
+STEP_TIMES_KEPT = 200_000  # most recent per-step timings kept in Stpik.step_times [-]
 LOOSE_FACTOR = 3.0  # tolerance multiplier on intermediate path samples [-]
 LOOKAHEAD_M = 0.05  # pairs are found up to this beyond their activation distance [m]
 # converge stops when the error (position [m] + STALL_RAD_TO_M · orientation [rad]) is above
@@ -133,6 +135,7 @@ class Stpik:
 
     Attributes:
         collision_time: wall time spent in FCL queries since the last :meth:`reset_timers` [s].
+        step_times: per :meth:`_step`: (solve, kinematics, collision) wall times [s].
     """
 
     def __init__(self, robot: Jaco2Model, config: PlannerConfig) -> None:
@@ -173,6 +176,9 @@ class Stpik:
         self.ee = EePoseTask(gain=c.ee_gain)
         self.posture = PostureTask(READY, c.posture_gain)  # reference: see ready_posture
         self.collision_time = 0.0
+        # Per STPIK step (:meth:`_step`): (solve + step bound, kinematics without collision,
+        # collision) wall times [s], the latest STEP_TIMES_KEPT (benchmarks read and clear it).
+        self.step_times: deque[tuple[float, float, float]] = deque(maxlen=STEP_TIMES_KEPT)
 
     def ready_posture(self, position: np.ndarray, q1: float) -> np.ndarray:
         """:data:`READY` turned to the azimuth of ``position`` [m], joint 1 nearest ``q1``."""
@@ -375,6 +381,8 @@ class Stpik:
         Returns:
             The new joint angles [rad] (7,), their kinematics, the names of the active tasks.
         """
+        t0 = time.perf_counter()
+        collision0 = self.collision_time
         dq, active = self.solve(k)
         largest = float(np.max(np.abs(dq)))
         if largest > self.config.max_joint_step_rad:
@@ -382,7 +390,11 @@ class Stpik:
         if bounded:  # converge (bounded=False) returns only its end point, checked there
             dq *= self.step_scale(k, dq)
         q = q + dq
-        return q, self.kinematics(q, scene, LOOKAHEAD_M if bounded else 0.0), active
+        t1 = time.perf_counter()
+        k_next = self.kinematics(q, scene, LOOKAHEAD_M if bounded else 0.0)
+        collision = self.collision_time - collision0
+        self.step_times.append((t1 - t0, time.perf_counter() - t1 - collision, collision))
+        return q, k_next, active
 
     def body_reach(self, k: Kinematics) -> tuple[np.ndarray, np.ndarray]:
         """R_{j,g} [m] (7, G) and each body's joint (G,): largest distance from joint j's axis
@@ -472,13 +484,8 @@ class Stpik:
                 raise PlanningTimeout.past(deadline, c.time_limit_s)
             # Collision checks only: placements without Jacobians (bit-identical to those of
             # kinematics), self pairs first, the scene only when no self pair is too close.
-            pin.forwardKinematics(self.model, self.data, q)
-            pin.updateFramePlacements(self.model, self.data)
-            pin.updateGeometryPlacements(
-                self.model, self.data, self.geometry_model, self.geometry_data
-            )
+            self.place_bodies(q)
             start = time.perf_counter()
-            self.bodies.place(self.geometry_data.oMg, self.data.oMf[self.ee_frame])
             found = self.bodies.self_proximities(c.self_activation_m)
             if not found:
                 hits = self.bodies.scene_proximities(scene, c.obstacle_activation_m)
@@ -490,6 +497,16 @@ class Stpik:
                 p = hits[0]
                 raise SceneCollision(p.name_a, p.name_b, p.distance)
         return out
+
+    def place_bodies(self, q: np.ndarray) -> None:
+        """Place the collision bodies at ``q`` [rad] (7,): forward kinematics, frame and
+        geometry placements, no Jacobians (collision-only checks of transits and RRTConnect)."""
+        pin.forwardKinematics(self.model, self.data, q)
+        pin.updateFramePlacements(self.model, self.data)
+        pin.updateGeometryPlacements(
+            self.model, self.data, self.geometry_model, self.geometry_data
+        )
+        self.bodies.place(self.geometry_data.oMg, self.data.oMf[self.ee_frame])
 
     def _check(
         self, k: Kinematics, index: int, target: pin.SE3, factor: float, active: list[str]
