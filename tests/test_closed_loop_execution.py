@@ -108,6 +108,8 @@ def test_closed_loop_removes_a_joint_offset_open_loop_does_not(launch, ros_node,
     assert ros_node.spin_until(lambda: any(t.phase == 'done' for t in seen['tracking']), 10.0)
     ticks = [t for t in seen['tracking'] if t.phase != 'stopped']
     assert len(ticks) > 100 and list(ticks[0].joint_names) == list(ARM_JOINTS)
+    # #26: one streamed reference per tick; each was logged 'trajectory finished' at INFO
+    assert sim.log_text().count('trajectory finished') == 0
     assert ticks[-1].phase == 'done' and ticks[-1].error_m < 0.005
     # Same relocation in open loop (goal tolerance above the offset so that it completes).
     _set(ros_node, 'motion_planner', execution_mode='open_loop', goal_tolerance_rad=0.1)
