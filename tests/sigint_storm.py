@@ -80,6 +80,9 @@ def main(argv: list[str]) -> int:
         return install(signum, spy if callable(handler) else handler)
 
     lifecycle.signal.signal = install_with_spy  # type: ignore[assignment]
+    # A signal of the first run may come before run_node installs its handler: install it now
+    # (a node process gets its handler as early as its run() is called).
+    install_with_spy(signal.SIGINT, lifecycle._request_stop)
     codes, stop_s = [], []
     for _ in range(runs):
         delay = rng.uniform(0.0, MAX_DELAY_S)

@@ -207,3 +207,28 @@ def test_the_stop_handler_records_the_signal_and_never_raises() -> None:
     lifecycle._request_stop(signal.SIGTERM, None)  # would raise KeyboardInterrupt before #26
     assert lifecycle.StopRequest.signal_name == 'SIGTERM' and lifecycle.StopRequest.requested()
     lifecycle.StopRequest.clear()
+
+
+EARLY_SCRIPT = """
+import sys
+import rclpy
+from qtree_node_support import lifecycle
+
+lifecycle.StopRequest.signal_name = 'SIGINT'  # arrived before run_node was called
+print('ready', flush=True)
+sys.exit(lifecycle.run_node(lambda: rclpy.create_node('early_node'), exit_watchdog=False))
+"""
+
+
+def test_a_stop_requested_before_the_run_starts_is_not_forgotten() -> None:
+    """Fresh-clone soak: clearing the request at the start of run_node lost a signal that came
+    just before it, and the sim node of one storm run spun on until the test timed out."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, ROS_DOMAIN_ID='230', ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    done = subprocess.run(
+        [sys.executable, '-c', EARLY_SCRIPT], capture_output=True, text=True, env=env, timeout=30
+    )
+    assert done.stdout.startswith('ready') and done.returncode == 0, done.stderr[-2000:]
