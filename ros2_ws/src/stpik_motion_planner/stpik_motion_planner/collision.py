@@ -347,6 +347,20 @@ class RobotBodies:
                 return False
         return True
 
+    def _scene_bounds(self, scene: SceneWorld) -> tuple[np.ndarray, np.ndarray]:
+        """(body indices (B,), lower bound of each (body, object) distance [m] (B, O)).
+
+        The distance from the body's centre to a box around the object in the object's frame,
+        minus the body's bounding radius; the base is skipped.
+        """
+        index = self._scene_index
+        delta = self._centres[index][:, None, :] - scene.centres[None]  # (B, O, 3)
+        x = delta[..., 0] * scene.cos + delta[..., 1] * scene.sin
+        y = delta[..., 1] * scene.cos - delta[..., 0] * scene.sin
+        local = np.stack([x, y, delta[..., 2]], axis=-1)
+        outside = np.maximum(np.abs(local) - scene.half[None], 0.0)
+        return index, np.linalg.norm(outside, axis=-1) - self._all_radii[index][:, None]
+
     def scene_clear(self, scene: SceneWorld, threshold: float) -> bool:
         """True when every (body, scene object) pair is more than ``threshold`` [m] apart.
 
@@ -354,13 +368,7 @@ class RobotBodies:
         """
         if not scene.objects:
             return True
-        index = self._scene_index
-        delta = self._centres[index][:, None, :] - scene.centres[None]  # (B, O, 3)
-        x = delta[..., 0] * scene.cos + delta[..., 1] * scene.sin
-        y = delta[..., 1] * scene.cos - delta[..., 0] * scene.sin
-        local = np.stack([x, y, delta[..., 2]], axis=-1)
-        outside = np.maximum(np.abs(local) - scene.half[None], 0.0)
-        bound = np.linalg.norm(outside, axis=-1) - self._all_radii[index][:, None]
+        index, bound = self._scene_bounds(scene)
         for body, obj in zip(*np.nonzero(bound <= threshold), strict=True):
             result = self._fresh_result()
             robot = self._body(int(index[body]))
@@ -378,13 +386,7 @@ class RobotBodies:
         """
         if not scene.objects:
             return []
-        index = self._scene_index
-        delta = self._centres[index][:, None, :] - scene.centres[None]  # (B, O, 3)
-        x = delta[..., 0] * scene.cos + delta[..., 1] * scene.sin
-        y = delta[..., 1] * scene.cos - delta[..., 0] * scene.sin
-        local = np.stack([x, y, delta[..., 2]], axis=-1)
-        outside = np.maximum(np.abs(local) - scene.half[None], 0.0)
-        bound = np.linalg.norm(outside, axis=-1) - self._all_radii[index][:, None]
+        index, bound = self._scene_bounds(scene)
         found: list[Proximity] = []
         for body, obj in zip(*np.nonzero(bound < threshold), strict=True):
             result = self._fresh_result()
