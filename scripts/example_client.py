@@ -67,7 +67,7 @@ def main() -> int:
     if not answer.success:
         return 1
     check = call(node, node.create_client(RelocateObject, '/relocate_object'),
-                 RelocateObject.Request(object_id='O2'))  # fmt: skip
+                 RelocateObject.Request(object_id='O2', scene_name=SCENE['name']))  # fmt: skip
     print(f'relocate O2: feasible={check.feasible} reason={check.reason} {check.message}')
     action = ActionClient(node, RetrieveTarget, '/retrieve_target')
     if not action.wait_for_server(timeout_sec=60.0):

@@ -17,6 +17,10 @@ from orchestration import NodeProcess, allocate_domain_id, start_node, stop_all
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 LOADED_EXECUTION_TIMEOUT_S = 240.0  # motion_planner_node's execution_timeout_s unless set [s]
+# motion_planner_node's joint_state_timeout_s unless set [s]: CI once saw the node default (3 s)
+# run out in test_execute_relocates_the_object_in_the_sim on a loaded 2-core machine. Tests of the
+# silence itself (test_faults) set the default explicitly.
+LOADED_JOINT_STATE_TIMEOUT_S = 15.0
 
 
 def probe_request(client: Any) -> Any:
@@ -56,6 +60,34 @@ def wait_answering(
     raise AssertionError(f'{client.srv_name}: no probe answered in {timeout_s} s')
 
 
+def wait_goal_answering(
+    client: Any,
+    spin_until: Callable[..., bool],
+    probe_goal: Any,
+    timeout_s: float = 60.0,
+    attempt_s: float = 3.0,
+) -> None:
+    """Like :func:`wait_answering` for an action client: send ``probe_goal`` (one the server
+    ends at once, e.g. an invalid one) until both its goal response and its result arrived.
+
+    ``wait_for_server`` only says the client discovered the server's entities; a goal response
+    or result written before the server matched this client's readers is lost (CI: 49 of 50
+    burst goals answered). A probe goal has no effect beyond its own immediate abort.
+    """
+    assert client.wait_for_server(timeout_sec=timeout_s), 'action server not available'
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        sent = client.send_goal_async(probe_goal)
+        if not spin_until(sent.done, attempt_s):
+            continue  # the goal response was lost: ask again
+        handle = sent.result()
+        if not handle.accepted:
+            return
+        if spin_until(handle.get_result_async().done, attempt_s):
+            return
+    raise AssertionError(f'no probe goal answered in {timeout_s} s')
+
+
 @pytest.fixture
 def ros_domain(monkeypatch: pytest.MonkeyPatch) -> int:
     """A private ROS_DOMAIN_ID for this test, set in the environment of the test and its nodes."""
@@ -81,6 +113,7 @@ def launch(ros_domain: int, tmp_path: Path) -> Iterator[Callable[..., NodeProces
             # arm lags): segments then took longer than the node's default 30 s margin.
             parameters = dict(kwargs.get('parameters') or {})
             parameters.setdefault('execution_timeout_s', LOADED_EXECUTION_TIMEOUT_S)
+            parameters.setdefault('joint_state_timeout_s', LOADED_JOINT_STATE_TIMEOUT_S)
             kwargs['parameters'] = parameters
         node = start_node(package, executable, **kwargs)
         nodes.append(node)
@@ -151,6 +184,9 @@ def ros_node(ros_domain: int) -> Iterator[Any]:
     node.wait_matched = wait_matched
     node.wait_answering = lambda client, timeout_s=30.0: wait_answering(
         client, spin_until, timeout_s
+    )
+    node.wait_goal_answering = lambda client, probe, timeout_s=60.0: wait_goal_answering(
+        client, spin_until, probe, timeout_s
     )
     node.wait_action_answering = lambda action, timeout_s=30.0: wait_action_answering(
         action, spin_until, timeout_s

@@ -84,6 +84,9 @@ def test_50_goals_from_50_action_clients_are_all_answered(launch: Any, ros_node:
         for _ in range(BURST)
     ]
     ros_node.wait_matched(*clients, timeout_s=60.0)
+    probe = RetrieveTarget.Goal(policy='__probe__')  # INVALID_GOAL at once
+    for client in clients:  # both directions matched: a lost reply is discovery, not the QoS
+        ros_node.wait_goal_answering(client, probe)
     sent = [c.send_goal_async(RetrieveTarget.Goal(max_episodes=1)) for c in clients]
     ros_node.spin_until(lambda: all(f.done() for f in sent), ANSWER_S)
     assert sum(f.done() for f in sent) == BURST, 'goal requests lost'

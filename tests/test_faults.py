@@ -117,7 +117,10 @@ def test_sim_killed_mid_execution(launch: Any, ros_node: Any) -> None:
     mp = launch(
         'stpik_motion_planner',
         'motion_planner_node',
-        parameters={'execution_timeout_s': EXECUTION_TIMEOUT_S},
+        parameters={
+            'execution_timeout_s': EXECUTION_TIMEOUT_S,
+            'joint_state_timeout_s': JOINT_STATE_TIMEOUT_S,
+        },
     )
     sim.wait_for_log('ready', READY_S)
     mp.wait_for_log('ready', READY_S)

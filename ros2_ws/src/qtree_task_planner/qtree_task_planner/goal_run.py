@@ -110,7 +110,11 @@ def run_goal(goal_handle: Any, ctx: GoalContext) -> tuple[int, str, Any, bool]:
         msg = 'service /relocate_object not available'
         return Result.MOTION_PLANNER_UNAVAILABLE, msg, None, False
     oracle = ctx.oracle = RosPlannerOracle(
-        ctx.planner, ctx.param('planner_timeout_s'), ctx.param('scene_wait_s'), ctx.stopping
+        ctx.planner,
+        ctx.param('planner_timeout_s'),
+        ctx.param('scene_wait_s'),
+        ctx.stopping,
+        scene_name=ctx.scene().scenario_name,
     )
     trainer = make_trainer(movable, target, oracle, settings.config)
     every = settings.feedback_every

@@ -71,6 +71,7 @@ class RosPlannerOracle:
         scene_wait_s: float,
         stop: threading.Event | None = None,
         backoff: Backoff | None = None,
+        scene_name: str = '',
     ) -> None:
         """Keep the client and the waits.
 
@@ -80,10 +81,13 @@ class RosPlannerOracle:
             scene_wait_s: how long NO_SCENE answers are retried [s].
             stop: set when the node is shutting down; ends a wait at once.
             backoff: retry bounds of busy / timed-out / lost answers (default :class:`Backoff`).
+            scene_name: the scene every question is about (the request's ``scene_name``: the
+                planner answers only for it); '' for the planner's current scene.
         """
         self.client = client
         self.timeout_s = timeout_s
         self.scene_wait_s = scene_wait_s
+        self.scene_name = scene_name
         self.stop = stop or threading.Event()
         self.backoff = backoff or Backoff()
         self.planner_runs = 0
@@ -116,7 +120,10 @@ class RosPlannerOracle:
             OracleUnavailableError: no answer in time, or the request was rejected.
         """
         request = RelocateObject.Request(
-            object_id=object_id, relocated_ids=list(relocated), execute=False
+            object_id=object_id,
+            relocated_ids=list(relocated),
+            execute=False,
+            scene_name=self.scene_name,
         )
         deadline = time.monotonic() + self.scene_wait_s
         busy = 0

@@ -28,6 +28,13 @@ EXTRA = {  # name: (default, low, high, description)
         60.0,
         'longest /joint_states silence during execution before EXECUTION_FAILED [s]',
     ),
+    'scene_wait_s': (
+        5.0,
+        0.0,
+        600.0,
+        'longest wait of a request for a first /scene, or for the scene its scene_name names, '
+        'before NO_SCENE [s]',
+    ),
     'request_timeout_s': (
         10.0,
         0.0,

@@ -80,7 +80,10 @@ class MotionPlannerNode(Node):
         received = time.monotonic()
         relocated = list(request.relocated_ids)
         wait_s = self.get_parameter('request_timeout_s').value
-        result = self._service.answer(request.object_id, relocated, received, wait_s)
+        scene_wait_s = self.get_parameter('scene_wait_s').value
+        result = self._service.answer(
+            request.object_id, relocated, received, wait_s, request.scene_name, scene_wait_s
+        )
         if result.feasible and request.execute:
             follow = lambda r: self._execution.follow(r, request.object_id, relocated)  # noqa: E731
             result = self._service.execute(result, follow)

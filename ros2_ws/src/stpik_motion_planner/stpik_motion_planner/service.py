@@ -10,7 +10,9 @@ Limits and timing of a request:
   (:mod:`.scene_checks`); an id not in the scene is ``UNKNOWN_OBJECT`` whatever its length.
   Answers, log lines and ``/motion_planner/events`` quote at most 5 ids, each cut to 40
   characters; the event carries at most 256 ids of at most 256 characters.
-- Bad requests, ``NO_SCENE`` and cache hits are answered at once, without waiting for the
+- A request waits up to ``scene_wait_s`` for a first /scene, or for the scene it names
+  (``scene_name``: a scene set on the simulator just before may still be on its way), then
+  ``NO_SCENE``. Bad requests and cache hits are answered at once, without waiting for the
   planner. Checks that need planning run one at a time (one STPIK state per planner); a request
   waits at most ``request_timeout_s`` for its turn, then ``PLANNER_BUSY``. ``time_limit_s`` bounds
   the planning itself, so an answer takes at most about ``request_timeout_s + time_limit_s``.
@@ -59,6 +61,7 @@ class PlannerService:
         """
         self._config, self._log = config, log
         self._lock = threading.Lock()  # swaps of the planner (held for an assignment only)
+        self._scene_swapped = threading.Condition(self._lock)  # a planner or a scene error came
         self._plan_lock = threading.Lock()  # held while planning: one STPIK state per planner
         self._waiting = threading.BoundedSemaphore(MAX_WAITING_PLANS)
         self._scene_lock = threading.Lock()  # one /scene handled at a time
@@ -100,20 +103,38 @@ class PlannerService:
             self._log('warning', f'scene rejected: {err}')
         with self._lock:
             self._planner, self._geometry = planner, geometry
+            self._scene_swapped.notify_all()
         self._original = {o.id: o for o in scenario.objects} if planner else {}
         if planner is not None:
             self._log('info', f'scene {msg.scenario_name!r}: planner rebuilt')
 
-    def answer(self, object_id: str, relocated: list[str], received: float, wait_s: float):
+    def answer(
+        self,
+        object_id: str,
+        relocated: list[str],
+        received: float,
+        wait_s: float,
+        scene_name: str = '',
+        scene_wait_s: float = 0.0,
+    ):
         """Validate and answer from the cache at once; plan (waiting for the planner) if needed.
 
         Args:
             received: ``time.monotonic()`` of the request [s].
             wait_s: longest wait for the planner from ``received`` (``request_timeout_s``) [s].
+            scene_name: the scene the request is about ('' any: the current one).
+            scene_wait_s: longest wait from ``received`` for a first scene, or for the scene named
+                ``scene_name`` [s].
         """
-        planner = self._planner
+        planner = self._wait_for_scene(scene_name, received + scene_wait_s)
         if planner is None:
             return self._no_planner()
+        if scene_name and planner.scenario.name != scene_name:
+            why = (
+                f'no /scene {scene_name!r} received within scene_wait_s={scene_wait_s:.1f} s '
+                f'(the planner has scene {planner.scenario.name!r})'
+            )
+            return PlanResult(False, Reason.NO_SCENE, why)
         answer = planner.precheck(object_id, relocated)
         if answer is not None:
             return answer
@@ -134,6 +155,23 @@ class PlannerService:
                 self._plan_lock.release()
         finally:
             self._waiting.release()
+
+    def _wait_for_scene(self, scene_name: str, deadline: float) -> MotionPlanner | None:
+        """The planner once it serves ``scene_name`` (any when ''), a scene was rejected, or
+        ``deadline`` (``time.monotonic()`` [s]) passed; None when there is none."""
+
+        def ready() -> bool:
+            if self._planner is None:
+                return bool(self._scene_error)
+            return not scene_name or self._planner.scenario.name == scene_name
+
+        with self._scene_swapped:
+            while not ready():
+                remaining = deadline - time.monotonic()
+                if remaining <= 0.0:
+                    break
+                self._scene_swapped.wait(remaining)
+            return self._planner
 
     def _no_planner(self) -> PlanResult:
         reason = Reason.INVALID_SCENE if self._scene_error else Reason.NO_SCENE

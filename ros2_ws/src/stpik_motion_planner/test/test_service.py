@@ -59,3 +59,36 @@ def test_scene_during_execution_is_applied_after_it() -> None:
 
     assert service.execute(plan, follow).feasible
     assert logs[-1] == ('info', "scene 's2': planner rebuilt")
+
+
+def test_a_request_waits_for_the_first_scene_and_for_the_scene_it_names() -> None:
+    """A question sent just after a scene was set (CI: the example client asked before /scene
+    arrived, NO_SCENE) waits for it up to scene_wait_s; a named scene the planner does not have
+    is NO_SCENE naming both scenes."""
+    import threading
+
+    service, _ = _service()
+    late = threading.Timer(0.3, service.on_scene, [scene_msg(load_scenario('s1'))])
+    late.start()
+    started = time.monotonic()
+    answer = service.answer('O2', [], started, 10.0, '', scene_wait_s=20.0)
+    assert answer.feasible and 0.25 < time.monotonic() - started < 15.0
+    stale = service.answer('O2', [], time.monotonic(), 10.0, 's2', scene_wait_s=0.2)
+    assert stale.reason == Reason.NO_SCENE and "'s2'" in stale.message and "'s1'" in stale.message
+    threading.Timer(0.3, service.on_scene, [scene_msg(load_scenario('s2'))]).start()
+    named = service.answer('O3', [], time.monotonic(), 10.0, 's2', scene_wait_s=20.0)
+    assert named.reason != Reason.NO_SCENE, named.message
+    assert service.answer('T', [], time.monotonic(), 10.0, 's2').reason != Reason.NO_SCENE
+
+
+def test_no_scene_is_answered_after_scene_wait_s_and_a_rejected_scene_at_once() -> None:
+    service, _ = _service()
+    started = time.monotonic()
+    assert service.answer('T', [], started, 10.0, '', 0.3).reason == Reason.NO_SCENE
+    assert time.monotonic() - started >= 0.3
+    wrong = scene_msg(load_scenario('s1'))
+    wrong.header.frame_id = 'camera_link'
+    service.on_scene(wrong)
+    started = time.monotonic()
+    assert service.answer('T', [], started, 10.0, '', 30.0).reason == Reason.INVALID_SCENE
+    assert time.monotonic() - started < 5.0
