@@ -1,4 +1,4 @@
-"""Cartesian path of a relocation (Sect. 3.1): sampling in ℝ³ with OMPL, side grasp only.
+"""Cartesian path of a relocation (Sect. 3.1): sampling in ℝ³ (RRTConnect), side grasp only.
 
 No ROS import. The path is home → pre-grasp (free space: straight line, else RRTConnect) →
 grasp → lift → carry → place in the drop zone → retreat. The STPIK check
@@ -18,22 +18,22 @@ from __future__ import annotations
 
 import itertools
 import math
+import time
 from dataclasses import dataclass
 
 import fcl
 import numpy as np
 import pinocchio as pin
-from ompl import base as ob
-from ompl import geometric as og
-from ompl import util as ou
 
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import PlannerConfig
+from stpik_motion_planner.exceptions import PlanningTimeout
 from stpik_motion_planner.hand_model import HandModel
+from stpik_motion_planner.rrt_connect import RrtConnect, question_seed
 
-ou.setLogLevel(ou.LOG_ERROR)
 WORKSPACE = ((-1.0, 1.0), (-1.0, 1.0), (-0.2, 1.2))  # sampling bounds x, y, z [m]
 LINE_STEP_M = 0.02  # resolution of straight-line checks [m]
+FREE_RANGE_M = 0.3  # longest RRTConnect extension of the palm ball [m]
 # Jaco² j2s7s300 (KINOVA_FACTS.md DH): shoulder = joint 2 at D1 above the base; the wrist centre
 # (joint 6) lies D6 + D7 behind the EE origin along the EE z axis.
 SHOULDER = np.array([0.0, 0.0, 0.2755])  # [m]
@@ -202,40 +202,40 @@ class CartesianSampler:
         return not self.corridor_blockers(grasp)
 
     def free_path(self, start: np.ndarray, goal: np.ndarray) -> list[np.ndarray]:
-        """Hand-centre waypoints from ``start`` to ``goal`` [m]: straight, else RRTConnect.
+        """Hand-centre waypoints from ``start`` to ``goal`` [m]: straight, else RRTConnect
+        (:mod:`.rrt_connect`, seeded from both ends: the same question, the same path).
 
         Returns:
-            Waypoints including both ends, or [] when no path was found in time.
+            Waypoints including both ends, or [] when none was found in
+            ``config.sampling_iterations`` iterations.
+
+        Raises:
+            PlanningTimeout: the search ran past ``config.sampling_time_s`` (a wall-time cap).
         """
         if not (self.point_free(start) and self.point_free(goal)):
             return []
         if self.segment_free(start, goal):
             return [start, goal]
-        space = ob.RealVectorStateSpace(3)
-        bounds = ob.RealVectorBounds(3)
-        for i, (low, high) in enumerate(WORKSPACE):
-            if i == 2:  # never below the lower end (the pre-grasp is at grasp height)
-                low = min(float(start[2]), float(goal[2]))
-            bounds.setLow(i, low)
-            bounds.setHigh(i, high)
-        space.setBounds(bounds)
-        setup = og.SimpleSetup(space)
-        setup.setStateValidityChecker(lambda s: self.point_free(np.array([s[0], s[1], s[2]])))
-        setup.getSpaceInformation().setStateValidityCheckingResolution(
-            LINE_STEP_M / space.getMaximumExtent()
+        low = np.array([b[0] for b in WORKSPACE])
+        high = np.array([b[1] for b in WORKSPACE])
+        low[2] = min(float(start[2]), float(goal[2]))  # never below the lower end (pre-grasp)
+        c = self.config
+        cap = time.perf_counter() + c.sampling_time_s
+        seed = question_seed(int(c.seed), np.asarray(start).tobytes(), np.asarray(goal).tobytes())
+        search = RrtConnect(
+            self.point_free,
+            low,
+            high,
+            np.random.default_rng(seed),
+            range_rad=FREE_RANGE_M,
+            resolution_rad=LINE_STEP_M,
+            deadline=cap,
+            on_deadline=lambda: PlanningTimeout.past(cap, c.sampling_time_s),
         )
-        a, b = space.allocState(), space.allocState()
-        for i in range(3):
-            a[i], b[i] = float(start[i]), float(goal[i])
-        setup.setStartAndGoalStates(a, b)
-        setup.setPlanner(og.RRTConnect(setup.getSpaceInformation()))
-        status = setup.solve(self.config.sampling_time_s)
-        if not setup.haveExactSolutionPath() or 'Exact' not in str(status):
+        start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+        states = search.solve(start, goal, c.sampling_iterations)
+        if states is None:
             return []
-        path = setup.getSolutionPath()
-        states = [
-            np.array([path.getState(i)[j] for j in range(3)]) for i in range(path.getStateCount())
-        ]
         return self.shortcut(states)
 
     def shortcut(self, points: list[np.ndarray]) -> list[np.ndarray]:

@@ -31,12 +31,26 @@ RANGES: dict[str, tuple[float, float, str]] = {
     'max_iterations': (1, 100, 'STPIK iterations per path sample [-]'),
     'max_joint_step_rad': (0.01, 1.0, 'largest joint change per STPIK iteration [rad]'),
     'time_limit_s': (1e-3, 600.0, 'planning time limit of one check [s]'),
-    'sampling_time_s': (1e-3, 10.0, 'RRTConnect time budget per free-space segment [s]'),
+    'sampling_time_s': (
+        1e-3,
+        10.0,
+        'wall-time cap of the RRTConnect of a free-space segment (past it: TIMEOUT) [s]',
+    ),
     'seed': (0, 2**31 - 1, 'seed of the sampling planner [-]'),
     'approach_directions': (1, 64, 'approach yaws tried around the object [-]'),
     'approach_yaw_step_rad': (0.05, 1.6, 'yaw between consecutive approach directions [rad]'),
     'ik_restarts': (0, 50, 'random IK seeds tried after a failed pre-grasp / slot solve [-]'),
-    'rrt_transit_s': (0.0, 10.0, 'RRTConnect budget of a colliding joint transit, 0 = off [s]'),
+    'rrt_transit_s': (
+        0.0,
+        10.0,
+        'wall-time cap of the RRTConnect of a colliding transit (past it: TIMEOUT), 0 = off [s]',
+    ),
+    'rrt_iterations': (
+        0,
+        100000,
+        'RRTConnect iterations of a colliding joint transit, 0 = off [-]',
+    ),
+    'sampling_iterations': (1, 100000, 'RRTConnect iterations per free-space segment [-]'),
     'pregrasp_standoff_m': (0.02, 0.5, 'pre-grasp distance before the grasp [m]'),
     'grasp_depth_m': (-0.05, 0.05, 'EE origin beyond the object axis along the approach [m]'),
     'lift_clearance_m': (0.0, 0.5, 'carried object bottom above the tallest object [m]'),
@@ -44,7 +58,16 @@ RANGES: dict[str, tuple[float, float, str]] = {
     'velocity_scale': (0.01, 1.0, 'fraction of the joint velocity limits used [-]'),
     'slot_spacing_m': (0.02, 0.5, 'distance between drop-zone slots [m]'),
 }
-INTEGER_FIELDS = frozenset({'max_iterations', 'seed', 'approach_directions', 'ik_restarts'})
+INTEGER_FIELDS = frozenset(
+    {
+        'max_iterations',
+        'seed',
+        'approach_directions',
+        'ik_restarts',
+        'rrt_iterations',
+        'sampling_iterations',
+    }
+)
 
 
 @dataclass
@@ -68,7 +91,8 @@ class PlannerConfig:
     max_iterations: int = 12  # the Cartesian step bound needs more, shorter steps near bodies
     max_joint_step_rad: float = 0.3
     time_limit_s: float = 5.0  # verification + Cartesian-bounded steps on a loaded 2-core machine
-    sampling_time_s: float = 0.05
+    sampling_time_s: float = 2.0  # a cap only: sampling_iterations bound the search (#29)
+    sampling_iterations: int = 500
     seed: int = 0
     # ±1.6 rad around the azimuth: front-row objects (reach ≈ 0.4 m) are only reachable from
     # the side (approached radially, the wrist folds over the base and link 6 hits the object).
@@ -78,7 +102,8 @@ class PlannerConfig:
     approach_yaw_step_rad: float = 0.2
     # Fallbacks of .robust_stpik: another IK branch or a detour where the first one fails.
     ik_restarts: int = 5
-    rrt_transit_s: float = 1.0
+    rrt_transit_s: float = 5.0  # a cap only: the iterations bound the search (#29)
+    rrt_iterations: int = 1000
     pregrasp_standoff_m: float = 0.1
     grasp_depth_m: float = 0.0
     lift_clearance_m: float = 0.04

@@ -23,7 +23,6 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 import pinocchio as pin
 from jaco2_description.model import HAND_OPENING_M, Jaco2Model
-from ompl import util as ou
 from qtree_scene.placement import (
     PLACEMENT_TOLERANCE_M,
     drop_slots,
@@ -69,7 +68,6 @@ MIN_SEGMENT_S = 0.05  # shortest time between two trajectory samples [s]
 # The simulator stands placed objects on their slot (qtree_scene.placement.settle_pose) [m].
 ENVELOPE_MARGIN_M = PLACEMENT_TOLERANCE_M
 HOVER_M = 0.12  # height above the pre-grasp of the descent when the joint line is blocked [m]
-_OMPL_SEEDED: list[int] = []
 
 
 class MotionPlanner:
@@ -104,9 +102,6 @@ class MotionPlanner:
         self.blockers = BlockerFinder(self)
         self.home_q = np.asarray(scenario.home, dtype=float)
         self.home_pose = pin.SE3(self.robot.ee_pose(self.home_q))
-        if not _OMPL_SEEDED:  # OMPL takes one global seed per process (first call only)
-            ou.RNG.setSeed(int(self.config.seed) + 1)
-            _OMPL_SEEDED.append(self.config.seed)
 
     def check(self, object_id: str, relocated_ids: Iterable[str]) -> PlanResult:
         """Can ``object_id`` be relocated once ``relocated_ids`` are gone? Uses the cache.

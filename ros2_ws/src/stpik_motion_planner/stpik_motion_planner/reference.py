@@ -5,9 +5,9 @@ Used by ``scripts/bench_false_infeasible.py`` to measure how often the real plan
 
 :class:`ReferencePlanner` is the motion planner with an exhaustive search: 33 approach yaws every
 0.1 rad (±1.6 rad around the object's azimuth) instead of 17 every 0.2 rad, two more STPIK
-iterations per path sample, 12 random IK restarts instead of 5 on every failed IK solve, 2 s
-instead of 1 s of joint-space RRTConnect wherever a straight joint transit collides
-(:mod:`.robust_stpik`), and a 60 s time limit.
+iterations per path sample, 12 random IK restarts instead of 5 on every failed IK solve, 3000
+instead of 1000 RRTConnect iterations wherever a straight joint transit collides
+(:mod:`.robust_stpik`), 2000 instead of 500 in free Cartesian space, and a 60 s time limit.
 
 :func:`verify_motion` checks a whole answer independently of the planner's collision code: the
 ``jaco2_description`` model's own python-fcl bodies every :data:`VERIFY_STEP_RAD` of joint
@@ -37,7 +37,9 @@ REFERENCE_CONFIG = {
     'approach_yaw_step_rad': 0.1,
     'max_iterations': 14,
     'ik_restarts': 12,
-    'rrt_transit_s': 2.0,
+    'rrt_iterations': 3000,
+    'rrt_transit_s': 10.0,
+    'sampling_iterations': 2000,
     'time_limit_s': 60.0,
 }
 _SKIPPED_LINKS = ('link_base', 'link_1')

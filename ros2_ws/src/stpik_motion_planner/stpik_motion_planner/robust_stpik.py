@@ -11,9 +11,14 @@ these two fallbacks (``benchmarks/results/false_infeasible.md``). No ROS import.
   joints), from a generator seeded by ``config.seed`` and the target pose, so that the same
   question gets the same seeds whatever was asked before (answers are cached by set,
   Assumption 2).
-* :meth:`RobustStpik.transit`: when the straight joint move collides, joint-space OMPL
-  RRTConnect for ``config.rrt_transit_s`` seconds (validity: joint limits, the self-hit and scene
-  safety margins; 0 turns it off), resampled to at most ``step_rad`` per joint per sample.
+* :meth:`RobustStpik.transit`: when the straight joint move collides, joint-space RRTConnect
+  (:mod:`.rrt_connect`) for at most ``config.rrt_iterations`` iterations (0 turns it off), its
+  random stream seeded from the question (``config.seed``, both ends), resampled to at most
+  ``step_rad`` per joint per sample. Validity: the joint limits and the self-hit and scene
+  *activation* distances, as for the straight transit: a detour STPIK's set-based tasks could
+  not follow is no detour (#29: the RRT accepted 5 mm where the obstacle task acts at 25 mm).
+  ``config.rrt_transit_s`` only caps its wall time: past it the check answers TIMEOUT (not
+  cached), so no cached answer depends on the machine's speed.
 
 Every trajectory still passes the planner's independent verifier before it is returned.
 """
@@ -27,14 +32,15 @@ from contextlib import contextmanager
 
 import numpy as np
 import pinocchio as pin
-from ompl import base as ob
-from ompl import geometric as og
 
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.exceptions import MotionPlannerError, PlanningTimeout
+from stpik_motion_planner.rrt_connect import RrtConnect, question_seed
 from stpik_motion_planner.stpik import Stpik, joint_segment
 
 SEED_RESOLUTION = 1e4  # target pose quantum of the restart generator's seed [1/m] [-]
+RRT_RANGE_RAD = 0.5  # longest RRTConnect extension (Euclidean in joint space) [rad]
+RRT_SHORTCUTS = 50  # random shortcut attempts on a found path [-]
 
 
 class RobustStpik(Stpik):
@@ -111,7 +117,7 @@ class RobustStpik(Stpik):
     @property
     def has_fallbacks(self) -> bool:
         """Whether the config enables any fallback (restarts > 0 or an RRT budget)."""
-        return self.config.ik_restarts > 0 or self.config.rrt_transit_s > 0.0
+        return self.config.ik_restarts > 0 or self.config.rrt_iterations > 0
 
     @contextmanager
     def plain(self) -> Iterator[None]:
@@ -157,7 +163,11 @@ class RobustStpik(Stpik):
         except PlanningTimeout:
             raise
         except MotionPlannerError as err:
-            if not self.fallbacks or self.config.rrt_transit_s <= 0.0:
+            if (
+                not self.fallbacks
+                or self.config.rrt_iterations <= 0
+                or (self.config.rrt_transit_s <= 0.0)
+            ):
                 raise
             path = self.rrt(
                 np.asarray(q_a, dtype=float), np.asarray(q_b, dtype=float), scene, deadline
@@ -167,18 +177,17 @@ class RobustStpik(Stpik):
             return path
 
     def valid(self, q: np.ndarray, scene: SceneWorld) -> bool:
-        """Within the joint limits and the self-hit and scene safety margins."""
+        """Within the joint limits, and the self-hit and scene pairs beyond their *activation*
+        distances (what the straight :meth:`~.stpik.Stpik.transit` requires)."""
         if np.any(q < self.lower) or np.any(q > self.upper):
             return False
         # Collision only (#28): placements without Jacobians (bit-identical to those of
-        # kinematics), pairs up to the safety margins only, the first hit ends the check. Same
-        # answer as testing the pairs :meth:`kinematics` finds (every pair at or below the margin
-        # is among them), at a fraction of the cost.
+        # kinematics), pairs up to the thresholds only, the first hit ends the check.
         c = self.config
         self.place_bodies(q)
         start = time.perf_counter()
-        clear = self.bodies.self_clear(c.self_min_distance_m) and self.bodies.scene_clear(
-            scene, c.obstacle_min_distance_m
+        clear = self.bodies.self_clear(c.self_activation_m) and self.bodies.scene_clear(
+            scene, c.obstacle_activation_m
         )
         self.collision_time += time.perf_counter() - start
         return clear
@@ -188,54 +197,43 @@ class RobustStpik(Stpik):
     ) -> np.ndarray | None:
         """RRTConnect q_a → q_b [rad] (7,): samples after q_a up to q_b (n, 7), or None.
 
-        None at once when an end itself is invalid (OMPL would only report it on stderr). The
-        search runs for ``config.rrt_transit_s`` [s] or until ``deadline`` (a
-        ``time.perf_counter()`` value), whichever comes first.
+        None at once when an end itself is invalid, and after ``config.rrt_iterations``
+        iterations without a path. The same ends (and seed) give the same samples in any
+        process, whatever was asked before (#29).
 
         Raises:
-            PlanningTimeout: the deadline has passed (before the search or during it).
+            PlanningTimeout: ``deadline`` (a ``time.perf_counter()`` value) or the
+                ``config.rrt_transit_s`` wall-time cap passed (before the search or during it).
         """
-        budget = min(float(self.config.rrt_transit_s), deadline - time.perf_counter())
-        if budget <= 0.0:
-            raise PlanningTimeout.past(deadline, self.config.time_limit_s)
+        c = self.config
+        now = time.perf_counter()
+        if deadline <= now:
+            raise PlanningTimeout.past(deadline, c.time_limit_s)
         if not (self.valid(q_a, scene) and self.valid(q_b, scene)):
             return None
-        space = ob.RealVectorStateSpace(7)
-        bounds = ob.RealVectorBounds(7)
+        cap = min(deadline, now + float(c.rrt_transit_s))
         # Continuous joints have infinite limits: search within ±π around both ends there.
         ends = np.vstack([q_a, q_b])
         low = np.where(np.isfinite(self.lower), self.lower, ends.min(axis=0) - math.pi)
         high = np.where(np.isfinite(self.upper), self.upper, ends.max(axis=0) + math.pi)
-        for i in range(7):
-            bounds.setLow(i, float(low[i]))
-            bounds.setHigh(i, float(high[i]))
-        space.setBounds(bounds)
-        setup = og.SimpleSetup(space)
-        setup.setStateValidityChecker(
-            lambda s: self.valid(np.array([s[i] for i in range(7)]), scene)
+        seed = question_seed(int(c.seed), q_a.tobytes(), q_b.tobytes())
+        search = RrtConnect(
+            lambda q: self.valid(q, scene),
+            low,
+            high,
+            np.random.default_rng(seed),
+            range_rad=RRT_RANGE_RAD,
+            resolution_rad=c.step_rad / 2,
+            deadline=cap,
+            on_deadline=lambda: PlanningTimeout.past(cap, cap - now),
         )
-        setup.getSpaceInformation().setStateValidityCheckingResolution(
-            self.config.step_rad / 2 / space.getMaximumExtent()
-        )
-        a, b = space.allocState(), space.allocState()
-        for i in range(7):
-            a[i], b[i] = float(q_a[i]), float(q_b[i])
-        setup.setStartAndGoalStates(a, b)
-        setup.setPlanner(og.RRTConnect(setup.getSpaceInformation()))
-        status = setup.solve(budget)
-        if not setup.haveExactSolutionPath() or 'Exact' not in str(status):
-            if time.perf_counter() > deadline:
-                raise PlanningTimeout.past(deadline, self.config.time_limit_s)
+        waypoints = search.solve(q_a, q_b, int(c.rrt_iterations))
+        if waypoints is None:
             return None
-        setup.simplifySolution(0.2)
-        path = setup.getSolutionPath()
-        path.interpolate()
-        states = [
-            np.array([path.getState(i)[j] for j in range(7)]) for i in range(path.getStateCount())
-        ]
-        out = [states[0]]
-        for s in states[1:]:  # samples ≤ step_rad apart, as the straight transit gives
-            out += list(joint_segment(out[-1], s, self.config.step_rad))
+        waypoints = search.shortcut(waypoints, RRT_SHORTCUTS)
+        out = [waypoints[0]]
+        for q in waypoints[1:]:  # samples ≤ step_rad apart, as the straight transit gives
+            out += list(joint_segment(out[-1], q, c.step_rad))
         return np.array(out[1:])
 
 

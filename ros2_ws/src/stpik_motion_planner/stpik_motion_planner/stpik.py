@@ -351,6 +351,10 @@ class Stpik:
         q = np.array(seed, dtype=float)
         self.ee.target = target
         self.posture.reference = q.copy()
+        # converge is an IK solve: only its end point is used (the motion to it is a checked
+        # transit), so its iterations are not step-bounded; bounded ones (tried for #29) were held
+        # by the obstacle task on the way and lost s2's O8 window. An end point inside a margin
+        # is the seed's failure, IK_NOT_CONVERGED (then the restarts), not a scene collision.
         k = self.kinematics(q, scene, lookahead=0.0)
         active: list[str] = []
         history: list[float] = []
@@ -370,13 +374,20 @@ class Stpik:
             ):
                 break
             q, k, active = self._step(q, k, scene, bounded=False)
-        self._check(k, -1, target, 1.0, active)
+        try:
+            self._check(k, -1, target, 1.0, active)
+        except (SelfCollision, SceneCollision) as err:  # an IK end point, not a motion (#29)
+            error = pose_error(target, k.world_ee)
+            residual_m, residual_rad = np.linalg.norm(error[:3]), np.linalg.norm(error[3:])
+            detail = f'the IK solution from this seed is in collision: {err}'
+            raise IkNotConverged(-1, float(residual_m), float(residual_rad), detail) from None
         return q
 
     def _step(
         self, q: np.ndarray, k: Kinematics, scene: SceneWorld, bounded: bool = True
     ) -> tuple[np.ndarray, Kinematics, list[str]]:
-        """One eq. (6) step from ``q`` [rad], clamped to ``max_joint_step_rad`` on every joint.
+        """One eq. (6) step from ``q`` [rad], clamped to ``max_joint_step_rad`` on every joint and
+        (``bounded``) scaled by :meth:`step_scale` so that no clear pair crosses its margin.
 
         Returns:
             The new joint angles [rad] (7,), their kinematics, the names of the active tasks.
@@ -387,7 +398,7 @@ class Stpik:
         largest = float(np.max(np.abs(dq)))
         if largest > self.config.max_joint_step_rad:
             dq *= self.config.max_joint_step_rad / largest
-        if bounded:  # converge (bounded=False) returns only its end point, checked there
+        if bounded:
             dq *= self.step_scale(k, dq)
         q = q + dq
         t1 = time.perf_counter()

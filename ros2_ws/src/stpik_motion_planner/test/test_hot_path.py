@@ -14,13 +14,14 @@ from stpik_motion_planner.robust_stpik import RobustStpik
 
 
 def _kinematic_valid(stpik: RobustStpik, q: np.ndarray, scene: SceneWorld) -> bool:
-    """The validity check before #28: every pair :meth:`kinematics` finds, above its margin."""
+    """The validity check before #28: every pair :meth:`kinematics` finds (those within the
+    activation distances) beyond its activation distance (#29: the RRT keeps those)."""
     if np.any(q < stpik.lower) or np.any(q > stpik.upper):
         return False
     k = stpik.kinematics(q, scene)
     c = stpik.config
-    return all(p.distance > c.self_min_distance_m for p in k.self_pairs) and all(
-        p.distance > c.obstacle_min_distance_m for p in k.scene_pairs
+    return all(p.distance > c.self_activation_m for p in k.self_pairs) and all(
+        p.distance > c.obstacle_activation_m for p in k.scene_pairs
     )
 
 

@@ -36,14 +36,14 @@ def test_ik_restarts_are_seeded_by_the_question(robot, free_scene) -> None:
     assert min(_pose_seed(0, pin.SE3(-np.eye(3), -pose.translation))) >= 0
 
 
-def test_rrt_refuses_an_invalid_end_before_ompl(robot, monkeypatch) -> None:
-    """An end past a joint limit is refused without an OMPL run (which only logs to stderr)."""
+def test_rrt_refuses_an_invalid_end_before_searching(robot, monkeypatch) -> None:
+    """An end past a joint limit is refused without a search."""
     from stpik_motion_planner import robust_stpik
 
-    def no_ompl(*_args):
-        raise AssertionError('OMPL started for an invalid end')
+    def no_search(*_args, **_kwargs):
+        raise AssertionError('RRTConnect started for an invalid end')
 
-    monkeypatch.setattr(robust_stpik.og, 'SimpleSetup', no_ompl)
+    monkeypatch.setattr(robust_stpik, 'RrtConnect', no_search)
     stpik = RobustStpik(robot, PlannerConfig())
     q_a = np.asarray(HOME, dtype=float)
     beyond = q_a.copy()

@@ -172,3 +172,16 @@ def test_fix9_transit_needs_the_activation_clearance(robot):
         pytest.fail('no post placement 8-20 mm from the transit')
     with pytest.raises(SceneCollision):
         stpik.transit(q_a, q_b, SceneWorld([post]))
+
+
+def test_fix10_an_ik_end_point_in_collision_is_not_a_scene_collision(robot):
+    """#29 point 3: converge (an IK solve, unbounded steps) ended with link_5 75.7 mm inside the
+    table on s2 and the answer was SCENE_COLLISION where the IK could not reach from that seed.
+    An IK end point inside a margin is IK_NOT_CONVERGED, naming the collision."""
+
+    stpik = Stpik(robot, PlannerConfig())
+    table = ObjectSpec('table', 'static', 'box', (0.35, 0.0, -0.025), size=(1.2, 1.4, 0.05))
+    ee = robot.ee_pose(READY)
+    below = pin.SE3(ee.rotation, np.array([ee.translation[0], ee.translation[1], -0.15]))
+    with pytest.raises(IkNotConverged, match=r"in collision: .* hits 'table'"):
+        stpik.converge(READY, below, SceneWorld([table]), iterations=40)
