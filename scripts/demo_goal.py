@@ -36,11 +36,16 @@ def retrieve_target(args: argparse.Namespace, nodes: list[NodeProcess]) -> Any:
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     rclpy.init()
-    node = rclpy.create_node('qtree_demo')
+    try:
+        node = rclpy.create_node('qtree_demo')
+    except Exception:  # RCLError: rclpy's SIGINT handler shut the context down just before
+        if not rclpy.ok():
+            raise KeyboardInterrupt from None
+        raise
     try:
         client = ActionClient(node, RetrieveTarget, '/retrieve_target')
         deadline = time.monotonic() + args.timeout
-        while not client.wait_for_server(timeout_sec=0.5):
+        while not _wait_for_server(client):
             check_alive(nodes)
             if time.monotonic() > deadline:
                 raise DemoError('the /retrieve_target action server did not appear')
@@ -89,6 +94,22 @@ def retrieve_target(args: argparse.Namespace, nodes: list[NodeProcess]) -> Any:
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
+
+
+def _wait_for_server(client: Any) -> bool:
+    """``client.wait_for_server`` for 0.5 s; KeyboardInterrupt once rclpy's SIGINT handler
+    shut the context down (the suite of 9ffde18: Ctrl-C there exited 1 with RCLError, not 130)."""
+    import rclpy
+
+    try:
+        found = client.wait_for_server(timeout_sec=0.5)
+    except Exception:
+        if not rclpy.ok():
+            raise KeyboardInterrupt from None
+        raise
+    if not rclpy.ok():
+        raise KeyboardInterrupt
+    return found
 
 
 def _spin_until_done(node: Any, future: Any, nodes: list[NodeProcess], deadline: float) -> Any:

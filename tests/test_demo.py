@@ -123,3 +123,23 @@ def test_demo_ctrl_c_stops_every_node(ros_domain: int, tmp_path: Path) -> None:
     assert 'Traceback' not in output, output[-3000:]
     assert not _node_pids(ros_domain), 'a node outlived the demo'
     assert list(tmp_path.glob('qtree_*_s3.mcap')), 'the recording is kept after Ctrl-C'
+
+
+def test_ctrl_c_right_after_rclpy_init_is_an_interrupt(monkeypatch) -> None:
+    """The suite of 9ffde18: a SIGINT between ``rclpy.init()`` and ``create_node`` (rclpy's
+    handler shuts the context down) ended the demo with RCLError and exit code 1, not 130."""
+    import argparse
+
+    import demo_goal
+    import rclpy
+
+    real_init = rclpy.init
+
+    def init_then_sigint(*args, **kwargs):
+        real_init(*args, **kwargs)
+        rclpy.shutdown()  # what rclpy's SIGINT handler does
+
+    monkeypatch.setattr(rclpy, 'init', init_then_sigint)
+    args = argparse.Namespace(timeout=5.0)
+    with pytest.raises(KeyboardInterrupt):
+        demo_goal.retrieve_target(args, [])

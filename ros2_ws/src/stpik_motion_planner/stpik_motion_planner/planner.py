@@ -59,7 +59,7 @@ from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.robust_stpik import RobustStpik
 from stpik_motion_planner.scene_checks import validate_request, validate_scenario
 from stpik_motion_planner.stpik import Stpik
-from stpik_motion_planner.verifier import Carried, TrajectoryVerifier
+from stpik_motion_planner.verifier import STOP_CLEARANCE_M, Carried, TrajectoryVerifier
 
 HAND_BELOW_EE_M = 0.06  # lowest point of the hand below the EE origin in a side grasp [m]
 HAND_HALF_HEIGHT_M = 0.0525  # half the hand's extent across the approach axis [m]
@@ -97,7 +97,8 @@ class MotionPlanner:
         self.robot = model if model is not None else Jaco2Model()
         self.stpik = RobustStpik(self.robot, self.config)
         self.hand = HandModel(self.robot, self.config.pregrasp_standoff_m)
-        self.verifier = TrajectoryVerifier(self.robot)
+        # Proves the executor's stop distance on every pair, the whole carried object included.
+        self.verifier = TrajectoryVerifier(self.robot, clearance_m=STOP_CLEARANCE_M)
         self.cache = FeasibilityCache()
         self.blockers = BlockerFinder(self)
         self.home_q = np.asarray(scenario.home, dtype=float)
@@ -375,7 +376,8 @@ class MotionPlanner:
             # Until the grasp the object itself stands in the way of the arm.
             with_obj = SceneWorld([*scene.objects.values(), obj])
             q_pre = stpik.converge(seed, path.pregrasp, with_obj, deadline=deadline)
-            _outside_limit_band(q_pre, stpik, self.config.joint_limit_activation_rad)
+            band = self.config.joint_limit_activation_rad
+            _outside_limit_band(q_pre, stpik, band)
             phase = 'transit to pre-grasp'
             to_pre = self._transit_to_pregrasp(q_pre, path.pregrasp, with_obj, deadline)
             phase = 'approach'
@@ -386,9 +388,12 @@ class MotionPlanner:
             world_obj = pin.SE3(
                 pin.rpy.rpyToMatrix(0.0, 0.0, obj.yaw), np.asarray(obj.position, dtype=float)
             )
+            # Held where the hand really is at the grasp (#29: the commanded pose was used, up
+            # to the tracking tolerance away).
+            in_hand = self.robot.ee_pose(approach[-1]).actInv(world_obj)
             stpik.bodies.attach(
                 obj,
-                path.approach[-1].actInv(world_obj),
+                in_hand,
                 settle_m=self.config.obstacle_activation_m + 0.002,  # set down: rows inactive
             )
             phase = 'lift'
@@ -398,6 +403,7 @@ class MotionPlanner:
                 try:
                     seed = stpik.ready_posture(above.translation, lift[-1][0])
                     q_above = stpik.converge(seed, above, scene, deadline=deadline)
+                    _outside_limit_band(q_above, stpik, band, 'pose above the drop slot')
                     break
                 except PlanningTimeout:
                     raise
@@ -412,12 +418,12 @@ class MotionPlanner:
             )
             stpik.bodies.detach()
             phase = 'retreat'
+            # Away from the object just placed, with it in the scene (#29: it was left out).
+            after = SceneWorld([*scene.objects.values(), self._placed(obj, place[-1], in_hand)])
             retreat = stpik.track(
-                place[-1], retreat_leg, scene, [False] * len(retreat_leg), deadline
+                place[-1], retreat_leg, after, [False] * len(retreat_leg), deadline
             )
             phase = 'return home'
-            placed = dataclasses.replace(obj, position=tuple(place_leg[-1].translation), yaw=0.0)
-            after = SceneWorld([*scene.objects.values(), placed])
             try:
                 home = stpik.transit(retreat[-1], self.home_q, after, deadline)
             except (SceneCollision, SelfCollision):
@@ -440,6 +446,13 @@ class MotionPlanner:
         release_index = sum(len(p) for p in parts) - 1
         return np.vstack([*parts, retreat]), grasp_index, release_index
 
+    def _placed(self, obj: ObjectSpec, q_release: np.ndarray, in_hand: pin.SE3) -> ObjectSpec:
+        """``obj`` where the hand at ``q_release`` [rad] leaves it: position and yaw of the
+        released pose (#29: the "after" scene stood it at the commanded slot with yaw 0)."""
+        pose = self.robot.ee_pose(q_release) * in_hand
+        yaw = math.atan2(pose.rotation[1, 0], pose.rotation[0, 0])
+        return dataclasses.replace(obj, position=tuple(pose.translation), yaw=yaw)
+
     def _transit_to_pregrasp(
         self, q_pre: np.ndarray, pregrasp: pin.SE3, scene: SceneWorld, deadline: float
     ) -> np.ndarray:
@@ -454,6 +467,9 @@ class MotionPlanner:
         except (SceneCollision, SelfCollision):
             hover = pin.SE3(pregrasp.rotation, pregrasp.translation + np.r_[0.0, 0.0, HOVER_M])
             q_hover = stpik.converge(q_pre, hover, scene, deadline=deadline)
+            _outside_limit_band(
+                q_hover, stpik, self.config.joint_limit_activation_rad, 'pose above the pre-grasp'
+            )
             down = interpolate(hover, pregrasp, self.config.step_m, self.config.step_rad)
             to_hover = stpik.transit(self.home_q, q_hover, scene, deadline)
             descent = stpik.track(q_hover, down, scene, [True] * len(down), deadline)
@@ -491,8 +507,9 @@ def _since(start: float) -> float:
     return time.perf_counter() - start
 
 
-def _outside_limit_band(q: np.ndarray, stpik: Stpik, band: float) -> None:
-    """Refuse a pre-grasp inside the joint-limit activation band (its tracker could not leave).
+def _outside_limit_band(q: np.ndarray, stpik: Stpik, band: float, what: str = 'pre-grasp') -> None:
+    """Refuse an IK solution a leg starts from (the pre-grasp, the pose above the drop slot, the
+    hover pose) inside the joint-limit activation band: its tracker could not leave it.
 
     Raises:
         JointLimitViolated: a limited joint within ``band`` [rad] of a limit.
@@ -501,7 +518,7 @@ def _outside_limit_band(q: np.ndarray, stpik: Stpik, band: float) -> None:
     j = int(np.argmin(margin))
     if margin[j] < band:
         err = JointLimitViolated(j, float(q[j]), stpik.lower[j], stpik.upper[j])
-        err.args = (f'{err} (pre-grasp within the {band:.2f} rad joint-limit activation band)',)
+        err.args = (f'{err} ({what} within the {band:.2f} rad joint-limit activation band)',)
         raise err
 
 

@@ -12,9 +12,16 @@ What is checked, at every densified configuration:
 * self-collision of every pair of ``Jaco2Model.self_collision_pairs``, plus the carried object
   against every link except the hand (link 7 and the fingers, which hold it);
 * scene collisions of every link and of the carried object against every scene object. The
-  base (it stands on the table) is not checked against static bodies; the carried object's body
-  is shortened at its bottom by :attr:`TrajectoryVerifier.support_tolerance_m`, so that picking it
-  up from / setting it down on a surface within the tracking tolerance is not a collision.
+  base (it stands on the table) is not checked against static bodies. The whole carried object
+  is checked against every other object; only against the *static* bodies it is picked up from
+  and set down on (the table) is its body shortened at its bottom by
+  :attr:`TrajectoryVerifier.support_tolerance_m`, so that lifting it from / setting it down on
+  a surface within the tracking tolerance is not a collision (#29: the bottom 12 mm were
+  unchecked against everything, and a neighbour grazing the carried object 3 mm deep passed).
+
+A pair counts as colliding below ``clearance_m``; the planner verifies with
+:data:`STOP_CLEARANCE_M`, the distance at which the executor stops the arm, so a returned
+trajectory is proven to keep at least that clearance on every pair, between samples too.
 
 The carried object stands at its initial pose until ``grasp_index``, moves rigidly with the
 end-effector from ``grasp_index`` to ``release_index``, and stands where it was released
@@ -47,7 +54,10 @@ from jaco2_description.model import ARM_JOINTS, EE_FRAME, Jaco2Model, urdf_text
 from qtree_scene.scene import ObjectSpec
 
 RESOLUTION_M = 0.01  # largest motion of any body point between two checks [m]
-SUPPORT_TOLERANCE_M = 0.012  # bottom slice of the carried object not checked [m]
+SUPPORT_TOLERANCE_M = 0.012  # bottom slice of the carried object not checked vs statics [m]
+# The executor's stop distance: the planner's obstacle_min_distance_m (5 mm) less the closed
+# loop's margin_tolerance_m (2 mm) [m].
+STOP_CLEARANCE_M = 0.003
 _HAND_KEYS = ('link_7', 'link_finger')
 
 
@@ -104,9 +114,13 @@ class VerificationReport:
         limit_violations: worst excess per (joint, side).
         self_collisions: worst distance per colliding pair of links (or carried/link).
         scene_collisions: worst distance per colliding (body, object) pair.
+        min_distance_m: smallest pair distance at the checked configurations [m] (a lower bound
+            where it was not computed exactly); between them every pair is proven to stay above
+            ``clearance_m`` when :attr:`ok`.
     """
 
     checked: int = 0
+    min_distance_m: float = math.inf
     max_gap_m: float = 0.0
     limit_violations: list[Violation] = field(default_factory=list)
     self_collisions: list[Violation] = field(default_factory=list)
@@ -247,29 +261,34 @@ class TrajectoryVerifier:
                     phase.append((rid, sid, 'scene_collision'))
         if carried is not None:
             pose0 = object_pose(carried.obj)
-            geometry, lift = _coal_geometry(carried.obj, self.support_tolerance_m)
+            short, lift = _coal_geometry(carried.obj, self.support_tolerance_m)
             lifted = pose0 * pin.SE3(np.eye(3), np.array([0.0, 0.0, lift]))
             full, _ = _coal_geometry(carried.obj)
             before = gm.addGeometryObject(pin.GeometryObject('carried_before', 0, 0, pose0, full))
             world_ee = self._ee_pose(q_grasp)
             joint_pose = self._joint_pose(q_grasp)
-            on_joint = joint_pose.actInv(lifted)
+            on_joint = joint_pose.actInv(pose0)
             held = gm.addGeometryObject(
-                pin.GeometryObject('carried', self._ee_joint, 0, on_joint, geometry)
+                pin.GeometryObject('carried', self._ee_joint, 0, on_joint, full)
+            )
+            on_joint_short = joint_pose.actInv(lifted)
+            held_short = gm.addGeometryObject(
+                pin.GeometryObject('carried_short', self._ee_joint, 0, on_joint_short, short)
             )
             released = self._ee_pose(q_release) * world_ee.actInv(pose0)
             after = gm.addGeometryObject(pin.GeometryObject('carried_after', 0, 0, released, full))
-            names += [carried.obj.id, 'carried', f'{carried.obj.id} (placed)']
+            names += [carried.obj.id, 'carried', 'carried', f'{carried.obj.id} (placed)']
             reaches.append(np.zeros(7))
-            reaches.append(self.reach(self._ee_joint, on_joint, geometry))
+            reaches.append(self.reach(self._ee_joint, on_joint, full))
+            reaches.append(self.reach(self._ee_joint, on_joint_short, short))
             reaches.append(np.zeros(7))
             for r, rid in enumerate(robot_ids):
                 pairs['before'].append((rid, before, 'scene_collision'))
                 pairs['after'].append((rid, after, 'scene_collision'))
                 if not any(key in names[r] for key in _HAND_KEYS):
                     pairs['carry'].append((held, rid, 'self_collision'))
-            for sid in scene_ids:
-                pairs['carry'].append((held, sid, 'scene_collision'))
+            for k, sid in enumerate(scene_ids):  # the whole body, but on its support surfaces
+                pairs['carry'].append((held_short if static[k] else held, sid, 'scene_collision'))
         # One symmetric activation map per phase; the model holds their union (one call instead
         # of one per pair), each phase checks the pairs of its mask.
         count = len(gm.geometryObjects)
@@ -397,6 +416,7 @@ class TrajectoryVerifier:
         for i in range(len(q)):
             self._limits(q[i], float(i), worst)
             d = distance(i, phase_at(float(i)))
+            report.min_distance_m = min(report.min_distance_m, float(np.min(d, initial=np.inf)))
             for k in np.flatnonzero(d < self.clearance_m):
                 self._record(worst, gm, names, kinds, int(k), float(i), float(d[k]))
         for i in range(len(q) - 1):

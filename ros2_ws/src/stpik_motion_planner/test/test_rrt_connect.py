@@ -103,3 +103,11 @@ def test_the_joint_rrt_keeps_the_activation_distance(robot) -> None:
     assert nearest(far) > config.obstacle_activation_m
     assert not stpik.valid(q, near)
     assert stpik.valid(q, far)
+
+
+@given(st.integers(1, 400))
+def test_bisection_order_checks_every_configuration_once(n: int) -> None:
+    from stpik_motion_planner.rrt_connect import _bisection_order
+
+    order = _bisection_order(n)
+    assert sorted(order) == list(range(1, n + 1)) and order[0] == n

@@ -185,3 +185,38 @@ def test_fix10_an_ik_end_point_in_collision_is_not_a_scene_collision(robot):
     below = pin.SE3(ee.rotation, np.array([ee.translation[0], ee.translation[1], -0.15]))
     with pytest.raises(IkNotConverged, match=r"in collision: .* hits 'table'"):
         stpik.converge(READY, below, SceneWorld([table]), iterations=40)
+
+
+def test_fix11_every_leg_start_is_checked_against_the_limit_band(robot, monkeypatch):
+    """#29 point 9: only the pre-grasp was refused inside the joint-limit activation band; the
+    pose above the drop slot (a leg start too) was not checked."""
+    from qtree_scene.scenario import load_scenario
+    from stpik_motion_planner import planner as planner_module
+
+    checked = []
+    real = planner_module._outside_limit_band
+
+    def spy(q, stpik, band, what='pre-grasp'):
+        checked.append(what)
+        return real(q, stpik, band, what)
+
+    monkeypatch.setattr(planner_module, '_outside_limit_band', spy)
+    result = planner_module.MotionPlanner(load_scenario('s1'), model=robot).plan('O2', [])
+    assert result.feasible, result.message
+    assert {'pre-grasp', 'pose above the drop slot'} <= set(checked)
+
+
+def test_fix12_the_placed_object_keeps_its_release_yaw(robot):
+    """#29 point 7: the "after" scene stood the placed object at yaw 0 whatever the hand did."""
+    from qtree_scene.scenario import load_scenario
+    from stpik_motion_planner.planner import MotionPlanner
+
+    planner = MotionPlanner(load_scenario('s1'), model=robot)
+    obj = planner.scenario.object('O2')
+    q = READY.copy()
+    in_hand = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, 0.4), np.array([0.0, 0.0, 0.05]))
+    placed = planner._placed(obj, q, in_hand)
+    world = robot.ee_pose(q) * in_hand
+    assert np.allclose(placed.position, world.translation)
+    expected = np.arctan2(world.rotation[1, 0], world.rotation[0, 0])
+    assert placed.yaw == pytest.approx(expected) and abs(placed.yaw) > 1e-3

@@ -105,3 +105,53 @@ def test_a_motion_far_from_everything_is_proven_free_without_densifying(verifier
     far = ObjectSpec('far', 'obstacle', 'cylinder', (-0.6, -0.6, 0.05), radius=0.02, height=0.1)
     report = verifier.verify(np.array([q_a, q_b]), [far])
     assert report.ok and report.checked == 2
+
+
+def _carried_over(robot, post_top_below_bottom_m: float, role: str = 'obstacle'):
+    """A carried cylinder 25 cm below the hand, swung 0.8 rad by joint 1, and a box whose top is
+    ``post_top_below_bottom_m`` [m] below the carried object's bottom where it ends (< 0: the box
+    reaches that far into the object's bottom slice)."""
+    q_a, q_b = HOME_Q.copy(), HOME_Q.copy()
+    q_b[0] += 0.8
+    ee_a, ee_b = robot.ee_pose(q_a), robot.ee_pose(q_b)
+    hanging = ee_a.translation + np.array([0.0, 0.0, -0.25])
+    obj = ObjectSpec('C', 'obstacle', 'cylinder', tuple(hanging), radius=0.02, height=0.08)
+    end = (ee_b * ee_a.inverse()).act(hanging)
+    top = end[2] - 0.04 - post_top_below_bottom_m
+    post = ObjectSpec(role, role, 'box', (end[0], end[1], top - 0.05), size=(0.2, 0.2, 0.1))
+    return np.array([q_a, q_b]), post, Carried(obj, 0, 1)
+
+
+def test_the_whole_carried_object_is_checked_against_other_objects(robot):
+    """#29 point 1: the bottom 12 mm of the carried object were unchecked against everything,
+    so an object reaching 6 mm into it passed; only its support surfaces keep that slice."""
+    verifier = TrajectoryVerifier(robot)
+    traj, post, carried = _carried_over(robot, -0.006)
+    report = verifier.verify(traj, [post], carried)
+    assert [(v.name_a, v.name_b) for v in report.scene_collisions] == [('carried', 'obstacle')]
+    assert report.scene_collisions[0].value == pytest.approx(-0.006, abs=1e-3)
+    traj, table, carried = _carried_over(robot, -0.006, role='static')
+    assert verifier.verify(traj, [table], carried).ok  # set down on a support: tolerated
+
+
+def test_the_planner_proves_the_executors_stop_distance(robot):
+    """A pair 2 mm apart is contact-free but inside the executor's stop distance (3 mm)."""
+    from stpik_motion_planner.config import PlannerConfig
+    from stpik_motion_planner.execution_config import ExecutionConfig
+    from stpik_motion_planner.verifier import STOP_CLEARANCE_M
+
+    assert (
+        pytest.approx(
+            PlannerConfig().obstacle_min_distance_m - ExecutionConfig().margin_tolerance_m
+        )
+        == STOP_CLEARANCE_M
+    )
+    traj, post, carried = _carried_over(robot, 0.002)
+    assert TrajectoryVerifier(robot).verify(traj, [post], carried).ok
+    strict = TrajectoryVerifier(robot, clearance_m=STOP_CLEARANCE_M).verify(traj, [post], carried)
+    assert not strict.ok and strict.scene_collisions[0].value == pytest.approx(0.002, abs=1e-3)
+    clear = TrajectoryVerifier(robot, clearance_m=STOP_CLEARANCE_M)
+    traj, post, carried = _carried_over(robot, 0.02)
+    report = clear.verify(traj, [post], carried)
+    # The smallest pair distance (a self pair of the arm here) is reported, above 3 mm.
+    assert report.ok and STOP_CLEARANCE_M < report.min_distance_m < 0.021
