@@ -27,7 +27,7 @@ from stpik_motion_planner.benchmarking import figures, peers, report, verificati
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import Reason
-from stpik_motion_planner.verifier import TrajectoryVerifier
+from stpik_motion_planner.verifier import STOP_CLEARANCE_M, TrajectoryVerifier
 from tqdm import tqdm
 
 OUT = Path(__file__).resolve().parents[1] / 'benchmarks' / 'results'
@@ -59,7 +59,8 @@ def main() -> None:
     peer_paths = 3 if quick else 10  # feasible paths per scene given to the IK peers
     max_sets = 400 if quick else 2000
     wall_start = time.perf_counter()
-    verifier = TrajectoryVerifier(Jaco2Model())
+    # At the executor's stop distance, like the planner's own check (#29).
+    verifier = TrajectoryVerifier(Jaco2Model(), clearance_m=STOP_CLEARANCE_M)
     rows, results, peer_runs, checked = [], [], [], []
     step_times: list[tuple[float, float, float]] = []  # per STPIK step (solve, kin., coll.) [s]
     for scene in tqdm(scenes, desc='scenes'):
@@ -108,7 +109,7 @@ def main() -> None:
         'load_average': [round(x, 1) for x in os.getloadavg()],
         'targets': TARGETS,
         'levels': {r['scene']: r['optimal_level'] for r in rows[:3]},
-        'verifier': verification.merge(checked, rejected),
+        'verifier': verification.merge(checked, rejected, STOP_CLEARANCE_M),
         'stpik_whole_path': {
             'paths': stpik.get('paths', 0),
             'success_rate': stpik.get('success_with_clearance'),

@@ -56,7 +56,7 @@ ASPECT = 1.75  # region width (y) / depth (x) [-]
 DROP_ZONE_CENTER = (0.0, 0.5, 0.15)  # [m]
 DROP_ZONE_SIZE = (0.3, 0.3, 0.3)  # [m]
 # Table edge behind the robot base [m]: the table reaches all around the base, so that the drop
-# slots of qtree_scene.placement (beside and behind the robot) have room for 30 relocations.
+# slots of qtree_scene.placement (beside and behind the robot) have room for 30 relocations+.
 TABLE_X_MIN = -DROP_TABLE_REACH_M
 TABLE_MARGIN = 0.1  # table border around the clutter region [m]
 RADIUS_LIMITS = (0.01, 0.08)  # accepted radius_range bounds [m]

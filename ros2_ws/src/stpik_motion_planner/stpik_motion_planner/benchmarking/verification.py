@@ -5,7 +5,13 @@ A check ``(R, o)`` is answered once for the SET R; in a run, the objects of R st
 0 … |R|−1 in the order they were relocated. Each feasible trajectory is therefore verified in
 several orders of R (sorted, reversed, and random ones), with the objects of R as they really
 are (exact shapes on their slots, :func:`qtree_scene.placement.slot_position`), not the
-planner's conservative envelopes.
+planner's conservative envelopes. An object of R stands where its own answer's hand released
+it (position and yaw of the released pose, #29) when that answer is among the results, else on
+its slot with its original yaw (counted as ``placed_pose_approximated``).
+
+Also measured per trajectory: the smallest pair distance the verifier computed
+(``min_clearance_mm``, verified at the executor's stop distance) and the carried object's
+largest tilt from upright between grasp and release (``carried_tilt_max_deg``).
 """
 
 from __future__ import annotations
@@ -15,6 +21,7 @@ import random
 import time
 
 import numpy as np
+import pinocchio as pin
 from qtree_scene.placement import slot_position
 from qtree_scene.scene import ObjectSpec, Scenario
 
@@ -24,13 +31,50 @@ from stpik_motion_planner.verifier import Carried, TrajectoryVerifier
 ORDERS = 3  # relocation orders of R tried per trajectory [-]
 
 
-def placed_objects(scenario: Scenario, order: list[str]) -> list[ObjectSpec]:
-    """The objects of ``order`` standing on slots 0, 1, … (the k-th relocated on slot k)."""
-    out = []
+def _object_pose(obj: ObjectSpec) -> pin.SE3:
+    return pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, obj.yaw), np.asarray(obj.position, dtype=float))
+
+
+def carried_poses(obj: ObjectSpec, result: PlanResult, robot) -> list[pin.SE3]:
+    """World poses of the carried object at every sample from the grasp to the release."""
+    q = result.joint_trajectory
+    in_hand = robot.ee_pose(q[result.grasp_index]).actInv(_object_pose(obj))
+    return [
+        robot.ee_pose(q[i]) * in_hand for i in range(result.grasp_index, result.release_index + 1)
+    ]
+
+
+def tilt_deg(pose: pin.SE3) -> float:
+    """Angle of the object's axis from the world vertical [deg]."""
+    return float(np.degrees(np.arccos(np.clip(pose.rotation[2, 2], -1.0, 1.0))))
+
+
+def released(obj: ObjectSpec, result: PlanResult, robot) -> ObjectSpec:
+    """``obj`` where ``result``'s hand released it (position, yaw about z)."""
+    pose = carried_poses(obj, result, robot)[-1]
+    yaw = float(np.arctan2(pose.rotation[1, 0], pose.rotation[0, 0]))
+    return dataclasses.replace(obj, position=tuple(pose.translation), yaw=yaw)
+
+
+def placed_objects(
+    scenario: Scenario, order: list[str], answers: dict | None = None, robot=None
+) -> tuple[list[ObjectSpec], int]:
+    """The objects of ``order`` where they stand once relocated in that order, and how many of
+    them stand on their slot with their original yaw because their own answer is not known.
+
+    Args:
+        answers: feasible results by ``(frozenset(relocated before), object id)``.
+    """
+    out, approximated = [], 0
     for index, object_id in enumerate(order):
         obj = scenario.object(object_id)
+        own = (answers or {}).get((frozenset(order[:index]), object_id))
+        if own is not None and robot is not None:
+            out.append(released(obj, own, robot))
+            continue
+        approximated += 1
         out.append(dataclasses.replace(obj, position=tuple(slot_position(scenario, index, obj))))
-    return out
+    return out, approximated
 
 
 def verify_results(
@@ -42,11 +86,17 @@ def verify_results(
     """Verifier figures over the feasible ``results`` of one scenario (cache items)."""
     rng = random.Random(seed)
     out = {'trajectories': 0, 'colliding': 0, 'limit_violations': 0, 'configurations': 0}
-    gaps, times, examples = [], [], []
+    out['placed_pose_approximated'] = 0
+    gaps, times, examples, clearances, tilts = [], [], [], [], []
+    robot = verifier.robot
+    answers = {key: r for key, r in results if r.feasible}
     for (relocated, object_id), result in results:
         if not result.feasible:
             continue
         out['trajectories'] += 1
+        tilts.append(
+            max(tilt_deg(p) for p in carried_poses(scenario.object(object_id), result, robot))
+        )
         base = sorted(relocated)
         orders = [base, base[::-1]]
         while len(orders) < ORDERS:
@@ -56,13 +106,16 @@ def verify_results(
         standing = [o for o in scenario.objects if o.id not in removed]
         collides = violates = False
         for order in orders[:ORDERS]:
+            placed, approximated = placed_objects(scenario, order, answers, robot)
+            out['placed_pose_approximated'] += approximated
             start = time.perf_counter()
             report = verifier.verify(
                 result.joint_trajectory,
-                standing + placed_objects(scenario, order),
+                standing + placed,
                 Carried(obj, result.grasp_index, result.release_index),
             )
             times.append(time.perf_counter() - start)
+            clearances.append(report.min_distance_m)
             out['configurations'] += report.checked
             gaps.append(report.max_gap_m)
             collides |= bool(report.self_collisions or report.scene_collisions)
@@ -74,12 +127,16 @@ def verify_results(
     out['max_gap_mm'] = round(max(gaps, default=0.0) * 1e3, 2)
     out['times'] = times
     out['examples'] = examples
+    out['clearances'] = clearances
+    out['tilts'] = tilts
     return out
 
 
-def merge(parts: list[dict], planner_rejections: int) -> dict:
+def merge(parts: list[dict], planner_rejections: int, verifier_clearance_m: float = 0.0) -> dict:
     """One ``verifier`` JSON block from the per-scenario parts."""
     times = [t for p in parts for t in p['times']]
+    clearances = [c for p in parts for c in p['clearances']]
+    tilts = [t for p in parts for t in p['tilts']]
     return {
         'trajectories': sum(p['trajectories'] for p in parts),
         'colliding': sum(p['colliding'] for p in parts),
@@ -89,5 +146,10 @@ def merge(parts: list[dict], planner_rejections: int) -> dict:
         'max_gap_mm': max((p['max_gap_mm'] for p in parts), default=0.0),
         'median_ms': round(float(np.median(times)) * 1e3, 1) if times else None,
         'planner_rejections': planner_rejections,
+        'clearance_m': verifier_clearance_m,
+        'min_clearance_mm': round(min(clearances) * 1e3, 2) if clearances else None,
+        'placed_pose_approximated': sum(p['placed_pose_approximated'] for p in parts),
+        'carried_tilt_max_deg': round(max(tilts), 1) if tilts else None,
+        'carried_tilt_median_of_maxima_deg': round(float(np.median(tilts)), 1) if tilts else None,
         'examples': [e for p in parts for e in p['examples']][:3],
     }
