@@ -141,7 +141,7 @@ def test_closed_loop_removes_a_joint_offset_open_loop_does_not(launch, ros_node,
     assert sim.alive() and mp.alive()
 
 
-def test_object_moved_onto_the_path_stops_the_arm_with_the_reason(launch, ros_node, plan):
+def test_object_moved_onto_the_path_stops_the_arm_and_undoes_it(launch, ros_node, plan):
     result, motion, _ = plan
     sim, mp, client, seen = _graph(launch, ros_node)
     assert ros_node.spin_until(lambda: seen['scene'] is not None, 10.0)
@@ -176,19 +176,21 @@ def test_object_moved_onto_the_path_stops_the_arm_with_the_reason(launch, ros_no
     answer = future.result()
     print(f'\n[closed loop] intruder on the path: {answer.message}')
     assert not answer.feasible
-    assert answer.reason == RelocateObject.Response.EXECUTION_FAILED
-    assert 'intruder' in answer.message
+    # #32: a change of the scene under the execution is named, and the relocation undone
+    assert answer.reason == RelocateObject.Response.SCENE_CHANGED, answer.message
+    assert "'intruder' added" in answer.message and 'undone' in answer.message
     assert ros_node.spin_until(
         lambda: any(t.phase == 'stopped' and 'intruder' in t.message for t in seen['tracking']),
         5.0,
     )
-    # The arm holds where it stopped: once it has braked (0.5 s; a soak run under load saw
-    # 0.012 rad of braking within the first second), it stays still.
+    # The arm went back to the start of the plan and holds there: once it has braked (0.5 s; a
+    # soak run under load saw 0.012 rad of braking within the first second), it stays still.
     assert ros_node.spin_until(lambda: len(states) > 10, 5.0)
     ros_node.spin_until(lambda: False, 0.5)
     held = states[-1]
     ros_node.spin_until(lambda: False, 1.0)
     assert np.max(np.abs(states[-1] - held)) < 0.01
+    assert np.max(np.abs(held - result.joint_trajectory[0])) < 0.02, held
     again = ros_node.call(client, RelocateObject.Request(object_id='O3'), 30.0)
     assert again.reason in (0, 201, 202, 203, 204, 205), again.message  # still serving
     assert sim.alive() and mp.alive()
