@@ -196,7 +196,7 @@ class TrajectoryExecution:
 
     def _grasp_failed(self, result: PlanResult, object_id: str, text: str) -> PlanResult:
         """Open loop: back along the approach to its first sample; GRASP_FAILED (#32)."""
-        why = f'grasp of {format_id(object_id)} failed: {text}'
+        why = f'the attach service refused {format_id(object_id)}: {text}'
         t_grasp = result.times[result.grasp_index]
         times, joints = reversed_samples(result.times, result.joint_trajectory, t_grasp, 0.0)
         with self._stop_lock:
