@@ -259,7 +259,8 @@ class Execution(TrajectoryExecution):
             return '', Reason.SUCCESS
         outcome, text = self._attach_call(object_id, attach)
         if outcome == REFUSED and attach:
-            return f'the attach service refused {format_id(object_id)}: {text}', Reason.GRASP_FAILED
+            why = f'the attach service refused {format_id(object_id)}: {text}'
+            return why, Reason.GRASP_FAILED
         if outcome:
             why = f'attach_object({format_id(object_id)}, {attach}) failed: {text}'
             return why, Reason.EXECUTION_FAILED
