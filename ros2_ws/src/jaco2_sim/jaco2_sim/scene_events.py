@@ -222,7 +222,7 @@ def check_scene(scenario: Scenario, objects: Sequence[ObjectSpec], field: str) -
     """
     candidate = dataclasses.replace(scenario, objects=tuple(objects))
     try:
-        validate_scenario(candidate, source=field)
+        validate_scenario(candidate, source=field, allow_no_target=True)  # T may be held
     except ScenarioError as err:  # 'field: objects[3].xy: problem' -> 'field: problem'
         problem = re.sub(r'^objects\[\d+\](\.[\w.]+)?: ', '', str(err).removeprefix(f'{field}: '))
         raise SceneEventError(f'{field}: {problem}') from None

@@ -243,3 +243,13 @@ def test_the_parameter_check_refuses_with_the_field(s1) -> None:
     bad = json.dumps([{'kind': 'move', 'object': 'O1', 'xy': [0.8, 0.0], 'at_s': 1}])
     with pytest.raises(SceneEventError, match=r"scene_events\[0\].xy: 'O1' overlaps 'T'"):
         sim.check_parameter('scene_events', bad, {})
+
+
+def test_events_can_be_set_while_the_target_is_held() -> None:
+    sim = Simulation('s1', RATE_HZ, 0.2)
+    sim.grasp('T', True, 0)  # the target is out of the clutter
+    text = json.dumps([{'kind': 'move', 'object': 'O4', 'xy': [0.45, -0.3], 'at_s': 0.0}])
+    sim.check_parameter('scene_events', text, {})
+    sim.configure_events(text)
+    run(sim, 0.05)
+    assert sim.event_log and 'move' in sim.event_log[-1], sim.event_log
