@@ -141,7 +141,7 @@ def test_closed_loop_removes_a_joint_offset_open_loop_does_not(launch, ros_node,
     assert sim.alive() and mp.alive()
 
 
-def test_object_moved_onto_the_path_stops_the_arm_with_the_reason(launch, ros_node, plan):
+def test_object_moved_onto_the_path_stops_the_arm_and_undoes_it(launch, ros_node, plan):
     result, motion, _ = plan
     sim, mp, client, seen = _graph(launch, ros_node)
     assert ros_node.spin_until(lambda: seen['scene'] is not None, 10.0)
@@ -176,19 +176,21 @@ def test_object_moved_onto_the_path_stops_the_arm_with_the_reason(launch, ros_no
     answer = future.result()
     print(f'\n[closed loop] intruder on the path: {answer.message}')
     assert not answer.feasible
-    assert answer.reason == RelocateObject.Response.EXECUTION_FAILED
-    assert 'intruder' in answer.message
+    # #32: a change of the scene under the execution is named, and the relocation undone
+    assert answer.reason == RelocateObject.Response.SCENE_CHANGED, answer.message
+    assert "'intruder' added" in answer.message and 'undone' in answer.message
     assert ros_node.spin_until(
         lambda: any(t.phase == 'stopped' and 'intruder' in t.message for t in seen['tracking']),
         5.0,
     )
-    # The arm holds where it stopped: once it has braked (0.5 s; a soak run under load saw
-    # 0.012 rad of braking within the first second), it stays still.
+    # The arm went back to the start of the plan and holds there: once it has braked (0.5 s; a
+    # soak run under load saw 0.012 rad of braking within the first second), it stays still.
     assert ros_node.spin_until(lambda: len(states) > 10, 5.0)
     ros_node.spin_until(lambda: False, 0.5)
     held = states[-1]
     ros_node.spin_until(lambda: False, 1.0)
     assert np.max(np.abs(states[-1] - held)) < 0.01
+    assert np.max(np.abs(held - result.joint_trajectory[0])) < 0.02, held
     again = ros_node.call(client, RelocateObject.Request(object_id='O3'), 30.0)
     assert again.reason in (0, 201, 202, 203, 204, 205), again.message  # still serving
     assert sim.alive() and mp.alive()
@@ -215,4 +217,46 @@ def test_bad_execution_and_disturbance_parameters_are_refused(launch, ros_node):
         result = future.result().results[0]
         assert not result.successful, (name, value)
         assert result.reason, (name, value)
+    assert sim.alive() and mp.alive()
+
+
+def test_a_scene_change_while_carrying_puts_the_object_back_and_goes_home(launch, ros_node, plan):
+    """#32: the carry is undone too: back to the grasp, the object put down there, then home."""
+    import json
+
+    result, _, _ = plan
+    sim, mp, client, seen = _graph(launch, ros_node)
+    assert ros_node.spin_until(lambda: seen['scene'] is not None, 10.0)
+    start = next(o for o in seen['scene'].objects if o.id == 'T').pose.position
+    states: list[np.ndarray] = []
+    ros_node.create_subscription(
+        JointState, '/joint_states', lambda m: states.append(np.array(m.position[:7])), 10
+    )
+    _set(ros_node, '/jaco2_sim', scene_events='')  # the parameter service answers
+    ros_node.wait_answering(client)
+    request = RelocateObject.Request(object_id='T', relocated_ids=EVERY_OBSTACLE, execute=True)
+    future = client.call_async(request)
+    t_grasp = float(result.times[result.grasp_index])
+    carrying = lambda: any(t.plan_time > t_grasp + 0.5 for t in seen['tracking'])  # noqa: E731
+    assert ros_node.spin_until(lambda: carrying() or future.done(), 300.0)
+    assert not future.done(), future.result().message
+    # O4 (still in the sim's clutter, left out of the request) moves aside: a change of the scene
+    move = {'kind': 'move', 'object': 'O4', 'xy': [0.45, -0.3], 'at_s': 0.0}
+    _set(ros_node, '/jaco2_sim', scene_events=json.dumps([move]))
+    assert ros_node.spin_until(future.done, 300.0), 'no answer'
+    answer = future.result()
+    print(f'\n[closed loop] change while carrying: {answer.message}')
+    assert answer.reason == RelocateObject.Response.SCENE_CHANGED, answer.message
+    assert "'O4' moved" in answer.message and "'T' put back in the clutter" in answer.message
+
+    def put_back() -> bool:
+        t = next(o for o in seen['scene'].objects if o.id == 'T')
+        return t.status == ObjectState.STATUS_IN_CLUTTER and seen['scene'].attached_id == ''
+
+    assert ros_node.spin_until(put_back, 10.0), 'T is not back in the clutter'
+    now = next(o for o in seen['scene'].objects if o.id == 'T').pose.position
+    moved = math.dist((now.x, now.y, now.z), (start.x, start.y, start.z))
+    assert moved < 0.005, f'T put down {moved * 1e3:.1f} mm from where it was grasped'
+    ros_node.spin_until(lambda: False, 1.0)
+    assert np.max(np.abs(states[-1] - result.joint_trajectory[0])) < 0.02, states[-1]
     assert sim.alive() and mp.alive()

@@ -39,6 +39,7 @@ class FakeArm:
         self.q = np.array(HOME, dtype=float)
         self.trajectories: list[JointTrajectory] = []
         self.grasps: list[tuple[str, bool]] = []
+        self.refuse = False  # the gripper answers success=false to a grasp (#32)
         self.states = node.create_publisher(JointState, ENDPOINTS['joint_state_topic'], 10)
         topic = ENDPOINTS['trajectory_topic']
         node.create_subscription(JointTrajectory, topic, self._on_trajectory, 10)
@@ -54,6 +55,8 @@ class FakeArm:
     def _on_attach(self, request: Any, response: Any) -> Any:
         self.grasps.append((request.object_id, request.attach))
         response.success, response.message = True, 'gripper closed' if request.attach else 'open'
+        if self.refuse and request.attach:
+            response.success, response.message = False, 'object slipped out of the fingers'
         return response
 
     def _publish(self) -> None:
@@ -62,14 +65,20 @@ class FakeArm:
         self.states.publish(msg)
 
 
-def test_planner_drives_the_configured_controller(launch: Any, ros_node: Any) -> None:
-    arm = FakeArm(ros_node)
+def start(launch: Any, ros_node: Any) -> Any:
+    """The motion planner on the pretend arm's endpoints, with s1 published on /scene."""
     planner = launch('stpik_motion_planner', 'motion_planner_node', parameters=ENDPOINTS)
     planner.wait_for_log('ready', 60.0)
     scene = ros_node.create_publisher(Scene, '/scene', LATCHED)
     assert ros_node.spin_until(lambda: scene.get_subscription_count() > 0, 20.0)
     scene.publish(scene_msg(load_scenario('s1')))
     assert ros_node.spin_until(lambda: 'planner rebuilt' in planner.log_text(), 30.0)
+    return planner
+
+
+def test_planner_drives_the_configured_controller(launch: Any, ros_node: Any) -> None:
+    arm = FakeArm(ros_node)
+    planner = start(launch, ros_node)
     assert ros_node.spin_until(lambda: arm.trajectories == [] and planner.alive(), 1.0)
     request = RelocateObject.Request(object_id='O2', execute=True)
     client = ros_node.create_client(RelocateObject, '/relocate_object')
@@ -78,3 +87,18 @@ def test_planner_drives_the_configured_controller(launch: Any, ros_node: Any) ->
     assert len(arm.trajectories) == 3  # approach, carry, retreat
     assert arm.grasps == [('O2', True), ('O2', False)]
     assert np.allclose(arm.q, answer.trajectory.points[-1].positions)
+
+
+def test_a_refused_grasp_is_grasp_failed_and_the_arm_goes_back(launch: Any, ros_node: Any) -> None:
+    """#32, open loop: the approach is reversed to its start, the answer names the object."""
+    arm = FakeArm(ros_node)
+    arm.refuse = True
+    start(launch, ros_node)
+    request = RelocateObject.Request(object_id='O2', execute=True)
+    client = ros_node.create_client(RelocateObject, '/relocate_object')
+    answer = ros_node.call(client, request, 120.0)
+    assert not answer.feasible
+    assert answer.reason == RelocateObject.Response.GRASP_FAILED, answer.message
+    assert "refused 'O2': object slipped" in answer.message and 'undone' in answer.message
+    assert len(arm.trajectories) == 2 and arm.grasps == [('O2', True)]  # approach, back
+    assert np.allclose(arm.q, HOME, atol=1e-6)

@@ -15,6 +15,7 @@ __all__ = [
     'Jaco2SimError',
     'ModelError',
     'ScenarioError',
+    'SceneEventError',
     'TrajectoryError',
     'WorldError',
 ]
@@ -34,3 +35,7 @@ class WorldError(Jaco2SimError):
 
 class DisturbanceError(Jaco2SimError):
     """A disturbance parameter is NaN, negative or out of its range."""
+
+
+class SceneEventError(Jaco2SimError):
+    """A ``scene_events`` entry is malformed or would leave the scene invalid (#32)."""

@@ -47,6 +47,7 @@ PARAMETERS = [
     ('velocity_limit_scale', 1.0, ('disturbance: fraction of the velocity limits', 0.05, 1.0)),
     ('measurement_noise_rad', 0.0, ('disturbance: joint-state noise σ [rad]', 0.0, 0.1)),
     ('noise_seed', 0, ('seed of the measurement noise', 0, 2**31 - 1)),
+    ('scene_events', '', ('test events (#32): YAML/JSON list, see jaco2_sim.scene_events',)),
 ]
 
 
@@ -65,10 +66,22 @@ def param(node: Node, name: str) -> Any:
         return None
 
 
-def apply_disturbances(node: Node, core: Simulation, params: Sequence[Parameter]) -> None:
-    """After a parameter change: reconfigure the disturbances if one of ``params`` is one."""
+def apply_parameters(node: Node, core: Simulation, params: Sequence[Parameter]) -> None:
+    """After a parameter change (or at start): reconfigure the disturbances if one of
+    ``params`` is one, arm the ``scene_events``."""
     if any(p.name in PARAMETER_FIELDS for p in params):
         core.configure_disturbances(disturbance_values(node))
+    for p in params:
+        if p.name == 'scene_events':
+            core.configure_events(p.value)
+            if p.value.strip():
+                node.get_logger().info(f'scene events armed: {len(core.events.events)}')
+
+
+def log_events(node: Node, core: Simulation) -> None:
+    """Log what the scene events did since the last call (#32)."""
+    while core.event_log:
+        node.get_logger().info(core.event_log.pop(0))
 
 
 def disturbance_values(node: Node, params: Sequence[Parameter] = ()) -> dict[str, Any]:
@@ -84,7 +97,9 @@ def check_parameters(node: Node, core: Simulation, params: list[Parameter]) -> S
         try:
             core.check_parameter(p.name, p.value, disturbance_values(node, params))
         except (*EXPECTED_ERRORS, TypeError, ValueError) as err:
-            return SetParametersResult(successful=False, reason=f'{p.name}: {err}')
+            text = str(err)  # scene_events messages name their field already
+            reason = text if text.startswith(p.name) else f'{p.name}: {text}'
+            return SetParametersResult(successful=False, reason=reason)
         except Exception as err:  # a bad value must not kill the node
             reason = f'{p.name}: unexpected {type(err).__name__}: {err}'
             logger.error(f'parameter rejected: {reason}')

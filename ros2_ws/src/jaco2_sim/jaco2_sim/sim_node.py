@@ -41,6 +41,7 @@ class Jaco2SimNode(Node):
             *map(p, ('scenario', 'sim_rate_hz', 'finger_angle_rad', 'initial_configuration')),
             api.disturbance_values(self),
         )
+        api.apply_parameters(self, self.core, [self.get_parameter('scene_events')])
         self.add_on_set_parameters_callback(lambda ps: api.check_parameters(self, self.core, ps))
         self.add_post_set_parameters_callback(self._apply_parameters)
         self.state_pub = self.create_publisher(JointState, '/joint_states', api.STATE_QOS)
@@ -49,10 +50,8 @@ class Jaco2SimNode(Node):
         # motion on its own thread: services and parameters (scene loading) never stop it (#18)
         self._motion = MutuallyExclusiveCallbackGroup()
         qos, group = api.TRAJECTORY_QOS, {'callback_group': self._motion}
-        on_raw = self._on_raw_trajectory
-        self.create_subscription(
-            JointTrajectory, '/joint_trajectory', on_raw, qos, raw=True, **group
-        )
+        self.create_subscription(JointTrajectory, '/joint_trajectory', self._on_raw_trajectory,
+                                 qos, raw=True, **group)  # fmt: skip
         self.create_subscription(JointState, p('command_topic'), self._on_command, qos, **group)
         for kind, name, cb in [(ResetScene, '~/reset_scene', self._on_reset),
                                (SetScene, '~/set_scene', self._on_set_scene),
@@ -65,7 +64,7 @@ class Jaco2SimNode(Node):
         self.get_logger().info(f'jaco2_sim ready: scenario {name}, {rate}')
 
     def _apply_parameters(self, params: list[Parameter]) -> None:
-        api.apply_disturbances(self, self.core, params)
+        api.apply_parameters(self, self.core, params)
         for p in params:
             if p.name == 'scenario':
                 try:
@@ -84,6 +83,7 @@ class Jaco2SimNode(Node):
 
     def _on_timer(self) -> None:
         finished, errors = self.core.step()
+        api.log_events(self, self.core)
         for error in errors:
             self._reject_trajectory(f'(delayed command) {error}')
         if finished:  # a whole trajectory; streamed references are counted by the core (#26)

@@ -15,10 +15,14 @@ Limits and failure behaviour:
   ``success=false`` / ``successful=false`` with the :class:`~jaco2_sim.exceptions.ScenarioError`
   text (file or ``SetScene``, field, problem); the current scene is kept. Any unexpected
   exception is answered the same way and logged as an error: the node never dies from a request.
+* ``scene_events`` (#32, off by default): objects moved, added or removed at a time or when the
+  hand comes near, grasps refused on a given attempt (:mod:`jaco2_sim.scene_events`); checked
+  against the current scene when set (``successful=false`` naming the field).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -31,8 +35,9 @@ from qtree_scene.scenario import load_scenario
 from qtree_scene.scene import Scenario
 
 from jaco2_sim.disturbances import PARAMETER_FIELDS, DisturbedDrive, from_parameters
-from jaco2_sim.exceptions import Jaco2SimError, ModelError, ScenarioError
+from jaco2_sim.exceptions import Jaco2SimError, ModelError, ScenarioError, WorldError
 from jaco2_sim.integrator import JointIntegrator
+from jaco2_sim.scene_events import SceneEvent, SceneEvents, check_scene, parse_events, placed
 from jaco2_sim.world import World
 
 MAX_MESSAGE_CHARS = 1000  # longest answer message [characters]
@@ -79,6 +84,8 @@ class Simulation:
         self._scene_version = -1
         self._last_scene_s = 0.0
         self.references_reached = 0  # streamed references reached (closed loop) [count]
+        self.events = SceneEvents()  # scene events (#32): none unless the parameter is set
+        self.event_log: list[str] = []  # what the events did since the node last read it
         # The node steps on one thread and loads scenes on another (#18): parsing a file stays
         # outside this lock, only the swap and the motion commands take it.
         self.lock = threading.Lock()
@@ -100,6 +107,19 @@ class Simulation:
             JointIntegrator(self.robot.limits, q0=np.asarray(value, dtype=float))
         elif name == 'finger_angle_rad':
             raise Jaco2SimError('fixed at start')
+        elif name == 'scene_events':
+            with self.lock:
+                clutter = self._clutter_scenario()
+            parse_events(value, clutter)
+
+    def configure_events(self, text: str) -> None:
+        """Arm the ``scene_events`` of ``text`` (checked before) from now on."""
+        with self.lock:
+            self.events = SceneEvents(parse_events(text, self._clutter_scenario()))
+            self.events.arm(self.sim.time)
+
+    def _clutter_scenario(self) -> Scenario:
+        return dataclasses.replace(self.world.scenario, objects=tuple(self.world.clutter()))
 
     def install(self, scenario: Scenario) -> None:
         """Make ``scenario`` the scene and teleport home; on any exception nothing has changed."""
@@ -108,6 +128,7 @@ class Simulation:
             self.sim.reset(np.asarray(scenario.home))
             self.drive.delay.clear()
             self.scenario, self.world = scenario, world
+            self.events.arm(self.sim.time)  # the events act on the new scene from now on
 
     def load(self, name: str) -> None:
         """Load scenario ``name`` (installed name or YAML path) with :meth:`install`."""
@@ -158,7 +179,41 @@ class Simulation:
             self.references_reached += reached and not finished
             if self.world.attached_id is not None:
                 self.world.update(self.robot.ee_pose(self.sim.q))
+            self._fire_events()
         return finished, errors
+
+    def _fire_events(self) -> None:
+        """Apply the scene events due now (under the lock); each line goes to :attr:`event_log`."""
+        if not self.events.events:
+            return
+        hand = self.robot.ee_pose(self.sim.q).translation if self.events.watches_hand else None
+
+        def centre(object_id: str) -> np.ndarray | None:
+            state = self.world.objects.get(object_id)
+            return None if state is None else state.pose.translation
+
+        for event in self.events.due(self.sim.time, hand, centre):
+            try:
+                self._apply_event(event)
+                self.event_log.append(f'scene event {event.describe()}')
+            except Jaco2SimError as err:  # the world changed since the events were set
+                self.event_log.append(f'scene event {event.field} skipped: {err}')
+
+    def _apply_event(self, event: SceneEvent) -> None:
+        world = self.world
+        if event.kind == 'remove':
+            world.remove(event.object_id)
+            return
+        if event.kind == 'add':
+            spec = event.spec
+        else:
+            state = world.state(event.object_id)
+            if state.status != 'in_clutter':
+                raise Jaco2SimError(f'{quote(event.object_id)} is {state.status}')
+            spec = placed(state.spec, event.xy, event.yaw)
+        others = [o for o in world.clutter() if o.id != spec.id]
+        check_scene(world.scenario, [*others, spec], f'{event.field}.xy')
+        world.place(spec)
 
     def scene_due(self, now_s: float, rate_hz: float) -> bool:
         """Whether the world changed and the last /scene is older than ``1 / rate_hz`` [s]."""
@@ -205,7 +260,17 @@ class Simulation:
             return self.release(object_id, status), ''
 
     def attach(self, object_id: str) -> tuple[str, str]:
-        """Grasp ``object_id`` where it is: (answer message, warning or '')."""
+        """Grasp ``object_id`` where it is: (answer message, warning or '').
+
+        Raises:
+            WorldError: as :meth:`World.attach`, or a ``grasp_failure`` scene event refuses it.
+        """
+        refused = self.events.refuse_grasp(object_id)
+        if refused is not None:
+            attempt = self.events.attempts[object_id]
+            raise WorldError(
+                f'grasp of {quote(object_id)} failed (attempt {attempt}, {refused.field})'
+            )
         distance = self.world.attach(object_id, self.robot.ee_pose(self.sim.q))
         warning = ''
         if distance > ATTACH_DISTANCE_WARN:

@@ -5,11 +5,14 @@ attach: transform_object_to_ee = ee_pose⁻¹ · object_pose, and after each EE 
 object_pose = ee_pose · transform_object_to_ee. A detached object stays where it is, except
 that an object released as ``'relocated'`` near its drop slot (the k-th relocation, slot k of
 :func:`qtree_scene.placement.drop_slots`) is stood upright on that slot: the planner plans later
-motions against exactly those poses.
+motions against exactly those poses; an object released ``'in_clutter'`` (an execution undone,
+#32) is stood upright on the table where it is. Scene events (#32) move, add or remove objects
+in the clutter (:meth:`World.place`, :meth:`World.remove`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -146,6 +149,51 @@ class World:
                 cos, sin = math.cos(settled[1]), math.sin(settled[1])
                 rotation = np.array([[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]])
                 state.pose = pin.SE3(rotation, settled[0])
+        else:  # put back down (#32: an execution undone): upright on the table where it is
+            spec, p = state.spec, state.pose.translation
+            yaw = math.atan2(state.pose.rotation[1, 0], state.pose.rotation[0, 0])
+            half = spec.height / 2 if spec.shape == 'cylinder' else spec.size[2] / 2
+            state.pose = spec_pose(dataclasses.replace(spec, position=(p[0], p[1], half), yaw=yaw))
         state.status = status
         self.attached_id = None
         self.version += 1
+
+    def place(self, spec: ObjectSpec) -> None:
+        """Put ``spec`` in the clutter at its pose (a scene event, #32): an object moved, or a new
+        one added to :attr:`scenario` (its status ``'in_clutter'``).
+
+        Raises:
+            WorldError: the object is held or relocated (only objects in the clutter move).
+        """
+        state = self.objects.get(spec.id)
+        if state is not None and state.status != 'in_clutter':
+            raise WorldError(f'{quote(spec.id)} is {state.status}, not in the clutter')
+        if state is None:
+            objects = (*self.scenario.objects, spec)
+            self.scenario = dataclasses.replace(self.scenario, objects=objects)
+        self.objects[spec.id] = ObjectState(spec, spec_pose(spec))
+        self.version += 1
+
+    def remove(self, object_id: str) -> None:
+        """Take ``object_id`` out of the scene (a scene event, #32).
+
+        Raises:
+            WorldError: unknown id, or the object is held.
+        """
+        state = self.state(object_id)
+        if self.attached_id == object_id:
+            raise WorldError(f'{quote(object_id)} is held by the hand')
+        del self.objects[state.spec.id]
+        objects = tuple(o for o in self.scenario.objects if o.id != object_id)
+        self.scenario = dataclasses.replace(self.scenario, objects=objects)
+        self.version += 1
+
+    def clutter(self) -> list[ObjectSpec]:
+        """The objects in the clutter (and the table) at their current poses."""
+        out = []
+        for state in self.objects.values():
+            if state.status == 'in_clutter':
+                p, r = state.pose.translation, state.pose.rotation
+                yaw = math.atan2(r[1, 0], r[0, 0])
+                out.append(dataclasses.replace(state.spec, position=tuple(map(float, p)), yaw=yaw))
+        return out

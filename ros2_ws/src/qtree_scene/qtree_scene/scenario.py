@@ -175,7 +175,10 @@ def check_object_count(count: int, fail: Callable[..., Any]) -> None:
 
 
 def validate_scenario(
-    scenario: Scenario, source: str | None = None, position_field: str = 'xy'
+    scenario: Scenario,
+    source: str | None = None,
+    position_field: str = 'xy',
+    allow_no_target: bool = False,
 ) -> None:
     """Check the geometry and roles of a scenario built in code, from a file or from a message.
 
@@ -184,6 +187,8 @@ def validate_scenario(
         source: prefix of the error messages (default: the scenario's file, else its name).
         position_field: name of an object's position field in the input the scenario came from
             (``xy`` in YAML files, ``pose.position`` in a Scene message).
+        allow_no_target: accept a scene without a target (the clutter while the target is
+            held or after it was relocated: scene events, #32); two targets stay refused.
 
     Raises:
         ScenarioError: see the module docstring for the rules.
@@ -197,7 +202,7 @@ def validate_scenario(
             fail(f'objects[{i}].id', f'duplicate id {obj.id!r} (also objects[{seen[obj.id]}])')
         seen[obj.id] = i
     targets = [f'objects[{i}]' for i, o in movable if o.role == 'target']
-    if len(targets) != 1:
+    if len(targets) != 1 and not (allow_no_target and not targets):
         fail('objects', f'exactly one object must have role target, found {len(targets)}')
     if TABLE_ID not in seen:
         fail('table', 'missing')

@@ -13,6 +13,7 @@ from typing import Any
 
 from qtree_task_planner.exceptions import InvalidParameterError
 from qtree_task_planner.planners import canonical_planner_name
+from qtree_task_planner.replanning import DEFAULT_MAX_REPLANS, MAX_REPLANS
 from qtree_task_planner.training import TrainingConfig
 
 FLOAT_FIELDS = ('alpha', 'gamma', 'epsilon0', 'epsilon_min', 'beta')  # every float64 goal field
@@ -26,11 +27,13 @@ class GoalSettings:
         config: the training configuration.
         feedback_every: publish feedback and a /qtree snapshot every this many episodes.
         execute: run the learned sequence on the arm after training.
+        max_replans: re-plans allowed during the execution (#32) [-].
     """
 
     config: TrainingConfig
     feedback_every: int
     execute: bool
+    max_replans: int = DEFAULT_MAX_REPLANS
 
 
 def settings_from_goal(goal: Any) -> GoalSettings:
@@ -38,7 +41,7 @@ def settings_from_goal(goal: Any) -> GoalSettings:
 
     Args:
         goal: fields policy, max_episodes, seed, alpha, gamma, epsilon0, epsilon_min, beta,
-            steady_episodes, execute, feedback_every.
+            steady_episodes, execute, feedback_every, max_replans (absent: the default 3).
 
     Returns:
         The validated settings.
@@ -60,6 +63,9 @@ def settings_from_goal(goal: Any) -> GoalSettings:
         raise InvalidParameterError('epsilon_min', goal.epsilon_min, reason)
     if int(goal.feedback_every) <= 0:
         raise InvalidParameterError('feedback_every', goal.feedback_every, 'must be > 0')
+    max_replans = int(getattr(goal, 'max_replans', DEFAULT_MAX_REPLANS))
+    if not 0 <= max_replans <= MAX_REPLANS:
+        raise InvalidParameterError('max_replans', max_replans, f'must be in [0, {MAX_REPLANS}]')
     config = TrainingConfig(  # validates alpha, gamma, max_episodes, beta, steady_episodes
         policy=policy,
         max_episodes=int(goal.max_episodes),
@@ -71,4 +77,4 @@ def settings_from_goal(goal: Any) -> GoalSettings:
         beta=float(goal.beta),
         steady_episodes=int(goal.steady_episodes),
     )
-    return GoalSettings(config, int(goal.feedback_every), bool(goal.execute))
+    return GoalSettings(config, int(goal.feedback_every), bool(goal.execute), max_replans)

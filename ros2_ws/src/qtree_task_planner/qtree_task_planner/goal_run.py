@@ -12,16 +12,25 @@ MOTION_PLANNER_UNAVAILABLE, with the statistics learned so far in the result; sc
 without a target in the clutter or no sequence learned -> NO_SOLUTION; cancel -> CANCELED (checked
 once per episode; during the execution the arm stops at once, result ``executed_ids``); an
 execution step failing -> EXECUTION_FAILED.
+
+Execution in a changing world (#32, :mod:`.replanning`): a step answered SCENE_CHANGED or
+GRASP_FAILED (undone by the motion planner), a step no longer feasible, or a scene change between
+two steps does not end the goal: the relocations done are kept, the rest is learned again from
+the current /scene with the goal's planner and executed, at most ``max_replans`` times (then
+REPLAN_LIMIT); no sequence from the new state -> NO_SOLUTION saying what changed; a target no
+longer in the clutter -> NO_SOLUTION. Feedback and result carry ``replans`` and
+``replan_causes``.
 """
 
 from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from qtree_msgs.action import RetrieveTarget
+from qtree_scene.changes import clutter_objects, scene_changes
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 
 from qtree_task_planner.exceptions import (
@@ -29,11 +38,17 @@ from qtree_task_planner.exceptions import (
     InvalidScenarioError,
     OracleUnavailableError,
 )
-from qtree_task_planner.goal import settings_from_goal
-from qtree_task_planner.messages import feedback_msg, movable_from_scene
+from qtree_task_planner.goal import GoalSettings, settings_from_goal
+from qtree_task_planner.messages import (
+    feedback_msg,
+    holds_object,
+    movable_from_scene,
+    relocated_ids,
+)
 from qtree_task_planner.planners import make_trainer
+from qtree_task_planner.replanning import PrefixOracle, combined, kept_prefix
 from qtree_task_planner.ros_oracle import RosPlannerOracle
-from qtree_task_planner.sequence_execution import CANCELED, FAILED, SequenceExecution
+from qtree_task_planner.sequence_execution import CANCELED, FAILED, OK, SequenceExecution
 from qtree_task_planner.training import STOP_CANCELLED
 
 Result = RetrieveTarget.Result
@@ -77,6 +92,7 @@ class GoalContext:
         publish_tree: ``(tree, episode)`` → /qtree.
         execution: runs the learned sequence (stops the arm on cancel).
         oracle: the running goal's planner oracle (its ``retries``), None before training.
+        replan_causes: the running goal's re-plans, the cause of each (#32).
     """
 
     scene: Callable[[], Any]
@@ -87,10 +103,11 @@ class GoalContext:
     publish_tree: Callable[[Any, int], None]
     execution: SequenceExecution
     oracle: RosPlannerOracle | None = None
+    replan_causes: list[str] = field(default_factory=list)
 
 
 def run_goal(goal_handle: Any, ctx: GoalContext) -> tuple[int, str, Any, bool]:
-    """Train (and execute) for one goal.
+    """Train (and execute, re-planning when the world changes: #32) for one goal.
 
     Returns:
         ``(error_code, message, TrainingResult or None, executed)``.
@@ -102,27 +119,46 @@ def run_goal(goal_handle: Any, ctx: GoalContext) -> tuple[int, str, Any, bool]:
     if not wait_for(lambda: ctx.scene() is not None, ctx.param('scene_wait_s')):
         msg = 'no /scene received (is the simulator or a scene publisher running?)'
         return Result.MOTION_PLANNER_UNAVAILABLE, msg, None, False
+    scene = ctx.scene()
     try:
-        movable, target = movable_from_scene(ctx.scene())
+        movable, target = movable_from_scene(scene)
     except InvalidScenarioError as err:
         return Result.NO_SOLUTION, str(err), None, False
     if not ctx.planner.wait_for_service(timeout_sec=ctx.param('planner_wait_s')):
         msg = 'service /relocate_object not available'
         return Result.MOTION_PLANNER_UNAVAILABLE, msg, None, False
-    oracle = ctx.oracle = RosPlannerOracle(
+    ctx.oracle = RosPlannerOracle(
         ctx.planner,
         ctx.param('planner_timeout_s'),
         ctx.param('scene_wait_s'),
         ctx.stopping,
-        scene_name=ctx.scene().scenario_name,
+        scene_name=scene.scenario_name,
     )
+    code, message, result = train(goal_handle, ctx, settings, movable, target, ctx.oracle)
+    if code != Result.SUCCESS or not settings.execute:
+        return code, message, result, False
+    code, message, result, executed = execute_with_replans(
+        goal_handle, ctx, settings, result, scene
+    )
+    return code, (f'{message}, executed' if executed else message), result, executed
+
+
+def train(
+    goal_handle: Any,
+    ctx: GoalContext,
+    settings: GoalSettings,
+    movable: tuple[str, ...],
+    target: str,
+    oracle: Any,
+) -> tuple[int, str, Any]:
+    """Learn a sequence of ``movable`` ending with ``target``: ``(code, message, result)``."""
     trainer = make_trainer(movable, target, oracle, settings.config)
     every = settings.feedback_every
 
     def on_episode(stats) -> bool:
         ctx.publish_stats(stats, trainer.policy.name)
         if stats.episode % every == 0:
-            goal_handle.publish_feedback(feedback_msg(stats))
+            goal_handle.publish_feedback(feedback_msg(stats, ctx.replan_causes))
             ctx.publish_tree(trainer.tree, stats.episode)
         return not (goal_handle.is_cancel_requested or ctx.stopping.is_set())
 
@@ -130,27 +166,84 @@ def run_goal(goal_handle: Any, ctx: GoalContext) -> tuple[int, str, Any, bool]:
         result = trainer.run(on_episode)
     except OracleUnavailableError as err:
         partial = trainer.result('motion_planner_unavailable')
-        return Result.MOTION_PLANNER_UNAVAILABLE, str(err), partial, False
+        return Result.MOTION_PLANNER_UNAVAILABLE, str(err), partial
     finally:
         ctx.publish_tree(trainer.tree, trainer.episode)
     if result.stop_reason == STOP_CANCELLED:
-        return Result.CANCELED, f'canceled after {result.episodes} episodes', result, False
+        return Result.CANCELED, f'canceled after {result.episodes} episodes', result
     if not result.sequence:
         msg = f'no feasible sequence learned in {result.episodes} episodes'
-        return Result.NO_SOLUTION, msg, result, False
+        return Result.NO_SOLUTION, msg, result
     summary = (
         f'{result.policy}: {list(result.sequence)} after {result.episodes} episodes, '
         f'{result.mp_calls} MP calls ({result.stop_reason})'
     )
-    if not settings.execute:
-        return Result.SUCCESS, summary, result, False
+    return Result.SUCCESS, summary, result
+
+
+def execute_with_replans(
+    goal_handle: Any, ctx: GoalContext, settings: GoalSettings, first: Any, scene: Any
+) -> tuple[int, str, Any, bool]:
+    """Execute the learned sequence; on a re-plan cause (:mod:`.replanning`) keep what was
+    executed, learn the rest again from the current /scene and go on, ``max_replans`` times.
+
+    Args:
+        first: the training result of the goal's scene; ``scene``: that /scene message.
+    """
+    results, prefix = [first], ()
     timeout_s = ctx.param('execute_timeout_s')
-    status, error = ctx.execution.run(result.sequence, timeout_s, ctx.stopping)
-    if status == CANCELED:
-        return Result.CANCELED, error, result, False
-    if status == FAILED:
-        return Result.EXECUTION_FAILED, error, result, False
-    return Result.SUCCESS, summary + ', executed', result, True
+    while True:
+        changed = scene_watch(ctx.scene, scene)
+        status, error = ctx.execution.run(
+            results[-1].sequence, timeout_s, ctx.stopping, prefix=prefix, changed=changed
+        )
+        total = combined(results, prefix)
+        if status == OK:
+            n = len(ctx.replan_causes)
+            replans = f'; {n} re-plans, followed {list(total.sequence)}' if n else ''
+            summary = (
+                f'{total.policy}: {list(first.sequence)} after {first.episodes} episodes, '
+                f'{first.mp_calls} MP calls ({first.stop_reason}){replans}'
+            )
+            return Result.SUCCESS, summary, total, True
+        if status == CANCELED:
+            return Result.CANCELED, error, total, False
+        if status == FAILED:
+            return Result.EXECUTION_FAILED, error, total, False
+        if len(ctx.replan_causes) >= settings.max_replans:
+            why = f'max_replans={settings.max_replans} re-plans made, one more needed: {error}'
+            return Result.REPLAN_LIMIT, why, total, False
+        ctx.replan_causes.append(error)
+        goal_handle.publish_feedback(feedback_msg(None, ctx.replan_causes))
+        # the scene once the undone relocation has put its object down (no object GRASPED)
+        wait_for(lambda: not holds_object(ctx.scene()), ctx.param('scene_wait_s'))
+        scene = ctx.scene()
+        prefix = kept_prefix(ctx.execution.executed, relocated_ids(scene))
+        try:
+            movable, target = movable_from_scene(scene)
+        except InvalidScenarioError as err:
+            return Result.NO_SOLUTION, f'after {error}: {err}', total, False
+        oracle = PrefixOracle(ctx.oracle, prefix)
+        code, message, result = train(goal_handle, ctx, settings, movable, target, oracle)
+        if result is not None:
+            results.append(result)
+        if code == Result.NO_SOLUTION:
+            kept = f'{len(prefix)} relocations kept {list(prefix)}'
+            message = f'after {error}: no sequence from the current state ({kept}): {message}'
+        if code != Result.SUCCESS:
+            return code, message, combined(results, prefix), False
+
+
+def scene_watch(scene: Callable[[], Any], baseline: Any) -> Callable[[list[str]], list[str]]:
+    """``changed(executed)``: what changed in the clutter of ``scene()`` since ``baseline``
+    (a /scene message), the objects in ``executed`` left out (they are carried away)."""
+    before = clutter_objects(baseline)
+
+    def changed(executed: list[str]) -> list[str]:
+        kept = {k: v for k, v in before.items() if k not in executed}
+        return scene_changes(kept, clutter_objects(scene(), set(executed)))
+
+    return changed
 
 
 def end_goal(goal_handle: Any, code: int, stopping: threading.Event) -> str:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 from qtree_msgs.action import RetrieveTarget
@@ -61,17 +62,26 @@ def stats_msg(stats: EpisodeStats, policy: str, stamp: Any) -> TrainingStats:
     )
 
 
-def feedback_msg(stats: EpisodeStats) -> RetrieveTarget.Feedback:
-    """Action feedback from one episode's statistics."""
-    return RetrieveTarget.Feedback(
-        episode=stats.episode,
-        nodes=stats.nodes,
-        edges=stats.edges,
-        mp_calls=stats.mp_calls,
-        q_bar=float(stats.q_bar),
-        epsilon=float(stats.epsilon),
-        best_sequence=list(stats.best_sequence),
-    )
+def feedback_msg(
+    stats: EpisodeStats | None, replan_causes: Sequence[str] = ()
+) -> RetrieveTarget.Feedback:
+    """Action feedback from one episode's statistics (None: only the re-plans, #32)."""
+    msg = RetrieveTarget.Feedback(replans=len(replan_causes), replan_causes=list(replan_causes))
+    if stats is not None:
+        msg.episode, msg.nodes, msg.edges = stats.episode, stats.nodes, stats.edges
+        msg.mp_calls, msg.best_sequence = stats.mp_calls, list(stats.best_sequence)
+        msg.q_bar, msg.epsilon = float(stats.q_bar), float(stats.epsilon)
+    return msg
+
+
+def relocated_ids(scene: Scene) -> list[str]:
+    """Ids of the objects a /scene message shows RELOCATED, in message order."""
+    return [o.id for o in scene.objects if o.status == ObjectState.STATUS_RELOCATED]
+
+
+def holds_object(scene: Scene) -> bool:
+    """Whether an object of a /scene message is GRASPED (an execution is not settled)."""
+    return any(o.status == ObjectState.STATUS_GRASPED for o in scene.objects)
 
 
 def tree_msg(tree: QTree, episode: int, stamp: Any) -> QTreeMsg:

@@ -6,12 +6,18 @@ with an empty ``/joint_trajectory`` (the sim holds its position) and
 ``/motion_planner/cancel_execution``, sent again every ``CANCEL_REPEAT_S`` until the motion
 planner answers the running relocation (it may still be planning when the cancel arrives), at
 most ``CANCEL_CONFIRM_S``. What was executed before is kept in :attr:`executed`.
+
+A world changing under the execution (#32) ends a run with ``'replan'`` and the cause
+(:func:`~.replanning.replan_cause`): a ``SCENE_CHANGED`` or ``GRASP_FAILED`` answer (the motion
+planner undid that relocation), a step answered infeasible, or the ``changed`` check before a
+step naming what moved since the sequence was learned. The goal then re-plans the rest.
 """
 
 from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from jaco2_description.model import ARM_JOINTS
@@ -23,11 +29,12 @@ from rclpy.node import Node
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
+from qtree_task_planner.replanning import replan_cause
 from qtree_task_planner.ros_oracle import wait_for_future
 
 CANCEL_REPEAT_S = 0.2  # period of the stop while the running relocation has not answered [s]
 CANCEL_CONFIRM_S = 5.0  # longest wait for the motion planner to confirm the stop [s]
-OK, CANCELED, FAILED = 'ok', 'canceled', 'failed'
+OK, CANCELED, FAILED, REPLAN = 'ok', 'canceled', 'failed', 'replan'
 
 
 @dataclass
@@ -75,7 +82,12 @@ class SequenceExecution:
         self._canceled.set()
 
     def run(
-        self, sequence: tuple[str, ...], timeout_s: float, stop: threading.Event
+        self,
+        sequence: tuple[str, ...],
+        timeout_s: float,
+        stop: threading.Event,
+        prefix: tuple[str, ...] = (),
+        changed: Callable[[list[str]], list[str]] | None = None,
     ) -> tuple[str, str]:
         """Relocate each object of ``sequence`` on the arm, unless canceled or failing.
 
@@ -83,18 +95,26 @@ class SequenceExecution:
             sequence: object ids in relocation order.
             timeout_s: longest wait for one relocation [s].
             stop: set when the node is shutting down; ends a wait at once.
+            prefix: ids relocated before (kept from an earlier run; in every request).
+            changed: ``changed(executed ids)`` before each step: what changed in the scene
+                since ``sequence`` was learned (empty: nothing).
 
         Returns:
-            (``'ok'`` | ``'canceled'`` | ``'failed'``, message); :attr:`executed` lists what was
-            relocated.
+            (``'ok'`` | ``'canceled'`` | ``'failed'`` | ``'replan'``, message or cause);
+            :attr:`executed` lists what was relocated, ``prefix`` first.
         """
-        self.executed = []
+        self.executed = list(prefix)
         interrupted = _AnyOf((stop, self._canceled))
-        for i, object_id in enumerate(sequence):
+        for object_id in sequence:
             if self._canceled.is_set():
                 return CANCELED, f'canceled before {quote(object_id)} (executed {self.executed})'
+            changes = changed(self.executed) if changed is not None else []
+            if changes:
+                return REPLAN, f'scene changed before relocating {quote(object_id)}: ' + (
+                    ', '.join(changes)
+                )
             request = RelocateObject.Request(
-                object_id=object_id, relocated_ids=list(sequence[:i]), execute=True
+                object_id=object_id, relocated_ids=list(self.executed), execute=True
             )
             future = self._client.call_async(request)
             done = wait_for_future(future, timeout_s, interrupted)
@@ -106,8 +126,12 @@ class SequenceExecution:
                 )
             if not done or future.result() is None:
                 return FAILED, f'executing {quote(object_id)}: no answer in {timeout_s} s'
-            if not future.result().feasible:
-                return FAILED, f'executing {quote(object_id)} failed: {future.result().message}'
+            answer = future.result()
+            if not answer.feasible:
+                cause = replan_cause(object_id, answer.reason, answer.message)
+                if cause is not None:
+                    return REPLAN, cause
+                return FAILED, f'executing {quote(object_id)} failed: {answer.message}'
             self.executed.append(object_id)
         return OK, ''
 

@@ -20,6 +20,7 @@ GOAL_DEFAULTS = dict(
     steady_episodes=50,
     execute=False,
     feedback_every=10,
+    max_replans=3,
 )
 
 

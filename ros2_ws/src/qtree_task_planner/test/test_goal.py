@@ -73,3 +73,13 @@ def test_a_huge_policy_is_quoted_short(make_goal) -> None:
     with pytest.raises(UnknownPolicyError, match=r'\(10000 characters\)') as err:
         settings_from_goal(make_goal(policy='P' * 10_000))  # was echoed in full (#18)
     assert len(str(err.value)) < 300
+
+
+def test_max_replans_defaults_to_3_and_is_bounded(make_goal) -> None:
+    assert settings_from_goal(make_goal()).max_replans == 3
+    assert settings_from_goal(make_goal(max_replans=0)).max_replans == 0
+    without = make_goal()
+    del without.max_replans  # a goal object without the field (an older client)
+    assert settings_from_goal(without).max_replans == 3
+    with pytest.raises(InvalidParameterError, match='max_replans'):
+        settings_from_goal(make_goal(max_replans=101))

@@ -273,6 +273,11 @@ class ClosedLoopController:
         self._held_s = 0.0
         self._stalled_s = 0.0
 
+    @property
+    def plan_time(self) -> float:
+        """Time along the plan of the current reference [s] (where a stopped arm is)."""
+        return self._t
+
     def set_scene(self, scene: SceneWorld) -> None:
         """Replace the scene checked by the obstacle task (the live scene)."""
         self.scene = scene

@@ -15,6 +15,14 @@ releases the object in between.
 On a stop (tracking lost, a set-based task that cannot hold, a joint state with missing or extra
 joints, no joint state for ``joint_state_timeout_s``) the arm is commanded to hold its last
 measured position and the relocation is answered ``EXECUTION_FAILED`` with the reason.
+
+Execution in a changing world (#32): until the object is released, every new /scene is compared
+with the scene at the start of the execution (:func:`qtree_scene.changes.scene_changes`, the
+objects in the clutter but the carried one); on a change the arm stops at once, before the
+controller's clearance check of that tick (so a newcomer is seen as a change, not a near miss),
+the relocation is undone (:mod:`.undo`: back along the executed path, a carried object put back
+down) and answered ``SCENE_CHANGED`` naming the objects; a grasp refused by the attach service is
+answered ``GRASP_FAILED`` the same way. If the way back is blocked too, ``EXECUTION_FAILED``.
 """
 
 from __future__ import annotations
@@ -26,9 +34,9 @@ import time
 
 import numpy as np
 import pinocchio as pin
-from geometry_msgs.msg import Pose
 from jaco2_description.model import ARM_JOINTS, Jaco2Model
 from qtree_msgs.msg import ObjectState, Scene, TrackingState
+from qtree_scene.changes import clutter_objects, scene_changes
 from qtree_scene.message import scenario_from_msg
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
@@ -45,9 +53,10 @@ from stpik_motion_planner.closed_loop import (
 )
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import RANGES, PlannerConfig
-from stpik_motion_planner.conversions import range_descriptor
+from stpik_motion_planner.conversions import command_msg, range_descriptor
+from stpik_motion_planner.conversions import xyzquat_pose_msg as pose_msg
 from stpik_motion_planner.exceptions import InvalidConfig
-from stpik_motion_planner.execution import TrajectoryExecution, arm_speed
+from stpik_motion_planner.execution import REFUSED, TrajectoryExecution, arm_speed
 from stpik_motion_planner.execution_config import (
     EXECUTION_RANGES,
     ExecutionConfig,
@@ -57,6 +66,7 @@ from stpik_motion_planner.execution_config import (
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.scene_checks import format_id
 from stpik_motion_planner.state_watch import SilenceWatch
+from stpik_motion_planner.undo import UNDONE, reversed_samples
 
 SCENE_FRAME = 'j2s7s300_link_base'  # frame of the EE poses in TrackingState
 
@@ -91,6 +101,8 @@ class Execution(TrajectoryExecution):
         self._last_state_time = -math.inf  # /joint_states time of the last control step [s]
         self._watch = SilenceWatch()  # /joint_states silence, not counting our own stalls
         self._stopped = ''
+        self._stop_reason = Reason.EXECUTION_FAILED
+        self._watched: dict | None = None  # clutter at the start, watched until the release
         self._state_error = ''
 
     def _config(self) -> ExecutionConfig:
@@ -140,25 +152,27 @@ class Execution(TrajectoryExecution):
     def _follow_segments(self, result: PlanResult, object_id: str) -> PlanResult:
         if self._node.get_parameter('execution_mode').value == 'open_loop':
             return super()._follow_segments(result, object_id)
-        failure = self._closed_loop(result, object_id)
+        failure, reason = self._closed_loop(result, object_id)
         if not failure:
             return result
-        return dataclasses.replace(
-            result, feasible=False, reason=Reason.EXECUTION_FAILED, message=failure
-        )
+        return dataclasses.replace(result, feasible=False, reason=reason, message=failure)
 
-    def _closed_loop(self, result: PlanResult, object_id: str) -> str:
-        """Run every segment; '' when executed, else why not."""
+    def _closed_loop(self, result: PlanResult, object_id: str) -> tuple[str, Reason]:
+        """Run every segment; ('', SUCCESS) when executed, else (why not, reason)."""
         node, config = self._node, self._config()
         silence_s = node.get_parameter('joint_state_timeout_s').value
         deadline = time.monotonic() + silence_s
         while self.q is None and not self._state_error and time.monotonic() < deadline:
             time.sleep(0.01)
         if self.q is None:
-            return self._state_error or f'no /joint_states within {silence_s:.1f} s'
+            why = self._state_error or f'no /joint_states within {silence_s:.1f} s'
+            return why, Reason.EXECUTION_FAILED
         planner_config = PlannerConfig(**{n: node.get_parameter(n).value for n in RANGES})
         with self._lock:
             self._object_id, self._stopped = object_id, ''
+            self._stop_reason = Reason.EXECUTION_FAILED
+            msg = self._scene_msg
+            self._watched = None if msg is None else clutter_objects(msg, {object_id})
             self._controller = ClosedLoopController(
                 self.robot, self._live_scene(), planner_config, config
             )
@@ -169,45 +183,97 @@ class Execution(TrajectoryExecution):
         timer = node.create_timer(config.period, self._on_tick, callback_group=self._timer_group)
         try:
             q_ref = np.array(self.q)
-            timeout = node.get_parameter('execution_timeout_s').value
-            for start, end, attach in segments(result):
+            for index, (start, end, attach) in enumerate(segments(result)):
                 if self._stopped:  # e.g. canceled while attaching (#18)
-                    return self._stopped
-                self._segment_end.clear()
-                with self._lock:
-                    self._controller.begin(motion, start, end, q_ref)
-                duration = result.times[end] - result.times[start]
-                if not self._segment_end.wait(duration + timeout):
-                    self._stop(f'segment to sample {end} not done in {duration + timeout:.1f} s')
-                if self._stopped:
-                    return self._stopped
+                    return self._stopped, self._stop_reason
+                if index == 2:  # released: placed, nothing to undo; the retreat is finished
+                    with self._lock:
+                        self._watched = None
+                if self._run_segment(motion, start, end, q_ref):
+                    return self._undone(result, motion, object_id, index)
                 q_ref = self._controller.q_ref
-                failure = self._grasp_or_release(object_id, attach)
+                failure, reason = self._grasp_or_release(object_id, attach)
                 if failure:
-                    self._stop(failure)
-                    return failure
-            return ''
+                    self._stop(failure, reason)
+                    return self._undone(result, motion, object_id, index)
+            return '', Reason.SUCCESS
         finally:
             timer.cancel()
             node.destroy_timer(timer)
             with self._lock:
                 self._controller = None
 
-    def _grasp_or_release(self, object_id: str, attach: bool | None) -> str:
+    def _run_segment(self, motion: PlannedMotion, start: int, end: int, q_ref: np.ndarray) -> str:
+        """Track samples ``start`` to ``end`` of ``motion``; '' when done, else the stop."""
+        timeout = self._node.get_parameter('execution_timeout_s').value
+        self._segment_end.clear()
+        with self._lock:
+            self._controller.begin(motion, start, end, q_ref)
+        duration = motion.times[end] - motion.times[start]
+        if not self._segment_end.wait(duration + timeout):
+            self._stop(f'segment to sample {end} not done in {duration + timeout:.1f} s')
+        return self._stopped
+
+    def _undone(
+        self, result: PlanResult, motion: PlannedMotion, object_id: str, segment: int
+    ) -> tuple[str, Reason]:
+        """After a stop in ``segment``: undo a SCENE_CHANGED / GRASP_FAILED one (:mod:`.undo`).
+
+        Returns:
+            (the answer's message, its reason): the stop's reason when undone, else
+            EXECUTION_FAILED naming the stop and why the arm could not go back.
+        """
+        why, reason = self._stopped, self._stop_reason
+        if reason not in (Reason.SCENE_CHANGED, Reason.GRASP_FAILED) or segment > 1:
+            return why, Reason.EXECUTION_FAILED if reason == Reason.SUCCESS else reason
+        with self._lock:
+            self._stopped, self._watched = '', None
+            t_stop = self._controller.plan_time
+            self._controller.set_scene(self._live_scene())
+            self._scene_dirty = False
+        t_grasp = float(result.times[result.grasp_index])
+        failure, put_back = '', ''
+        if segment == 1:  # carrying: back to the grasp, the object put down where it was
+            failure = self._back(motion, t_stop, t_grasp)
+            if not failure:
+                outcome, text = self._attach_call(object_id, False, ObjectState.STATUS_IN_CLUTTER)
+                failure = f'release of {format_id(object_id)} failed: {text}' if outcome else ''
+                put_back = f', {format_id(object_id)} put back in the clutter where it was grasped'
+            if not failure:
+                with self._lock:
+                    self._controller.detach()
+            t_stop = t_grasp
+        failure = failure or self._back(motion, t_stop, float(result.times[0]))
+        if failure:
+            return f'{why}; the arm could not go back: {failure}', Reason.EXECUTION_FAILED
+        return f'{why}; {UNDONE}{put_back}', reason
+
+    def _back(self, motion: PlannedMotion, t_from: float, t_to: float) -> str:
+        """Go back along ``motion`` from plan time ``t_from`` to ``t_to`` [s]; '' or the stop."""
+        times, joints = reversed_samples(motion.times, motion.joints, t_from, t_to)
+        backwards = PlannedMotion(times, joints, self.robot)
+        return self._run_segment(backwards, 0, len(times) - 1, np.array(self.q))
+
+    def _grasp_or_release(self, object_id: str, attach: bool | None) -> tuple[str, Reason]:
         if attach is None:
-            return ''
-        if not self._call_attach(object_id, attach):
-            return f'attach_object({format_id(object_id)}, {attach}) failed'
+            return '', Reason.SUCCESS
+        outcome, text = self._attach_call(object_id, attach)
+        if outcome == REFUSED and attach:
+            why = f'the attach service refused {format_id(object_id)}: {text}'
+            return why, Reason.GRASP_FAILED
+        if outcome:
+            why = f'attach_object({format_id(object_id)}, {attach}) failed: {text}'
+            return why, Reason.EXECUTION_FAILED
         with self._lock:
             if not attach:
                 self._controller.detach()
-                return ''
+                return '', Reason.SUCCESS
             found = self._scene_object(object_id)
             if found is None:
-                return f'{format_id(object_id)} is not in the last /scene'
+                return f'{format_id(object_id)} is not in the last /scene', Reason.EXECUTION_FAILED
             spec, pose = found
             self._controller.attach(spec, pose, np.array(self.q))
-        return ''
+        return '', Reason.SUCCESS
 
     def _on_tick(self) -> None:
         """One control tick (timer thread)."""
@@ -233,6 +299,11 @@ class Execution(TrajectoryExecution):
             self._last_state_time = self.state_time
             try:
                 if self._scene_dirty:
+                    changes = self._scene_changes()
+                    if changes:  # #32: before this tick's clearance check
+                        why = f'scene changed under the execution: {", ".join(changes)}'
+                        self._stop_locked(why, Reason.SCENE_CHANGED)
+                        return
                     controller.set_scene(self._live_scene())
                     self._scene_dirty = False
                 tick = controller.step(np.array(self.q))
@@ -253,15 +324,16 @@ class Execution(TrajectoryExecution):
         if self._controller is not None:
             self._stop('execution canceled')
 
-    def _stop(self, why: str) -> None:
+    def _stop(self, why: str, reason: Reason = Reason.EXECUTION_FAILED) -> None:
         with self._lock:
-            self._stop_locked(why)
+            self._stop_locked(why, reason)
 
-    def _stop_locked(self, why: str) -> None:
+    def _stop_locked(self, why: str, reason: Reason = Reason.EXECUTION_FAILED) -> None:
         """Hold the last measured position, publish the stop, wake the service thread."""
         if self._stopped:
             return
         self._stopped = f'closed loop stopped: {why}'
+        self._stop_reason = reason
         self._node.get_logger().warning(self._stopped)
         if self.q is not None:
             self._command_pub.publish(command_msg(self.q))
@@ -269,6 +341,13 @@ class Execution(TrajectoryExecution):
         msg.header.stamp = self._node.get_clock().now().to_msg()
         self._tracking_pub.publish(msg)
         self._segment_end.set()
+
+    def _scene_changes(self) -> list[str]:
+        """What changed in the clutter since the execution started (none once released)."""
+        if self._watched is None or self._scene_msg is None:
+            return []
+        now = clutter_objects(self._scene_msg, {self._object_id})
+        return scene_changes(self._watched, now)
 
     def _live_scene(self) -> SceneWorld:
         """Objects still in the clutter, but the carried one and the request's relocated ones."""
@@ -312,17 +391,3 @@ class Execution(TrajectoryExecution):
         msg.header.stamp = self._node.get_clock().now().to_msg()
         msg.header.frame_id = SCENE_FRAME
         return msg
-
-
-def command_msg(q: np.ndarray) -> JointState:
-    """sensor_msgs/JointState reference of the 7 arm joints [rad]."""
-    return JointState(name=list(ARM_JOINTS), position=[float(v) for v in q])
-
-
-def pose_msg(xyzquat: np.ndarray) -> Pose:
-    """xyz [m] + quaternion xyzw (7,) → Pose."""
-    pose = Pose()
-    pose.position.x, pose.position.y, pose.position.z = (float(v) for v in xyzquat[:3])
-    o = pose.orientation
-    o.x, o.y, o.z, o.w = (float(v) for v in xyzquat[3:])
-    return pose

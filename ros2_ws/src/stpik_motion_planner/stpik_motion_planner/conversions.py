@@ -16,6 +16,7 @@ from qtree_msgs.msg import PlanningEvent
 from qtree_msgs.srv import RelocateObject
 from qtree_node_support.text import clip
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from stpik_motion_planner.result import PlanResult
@@ -123,3 +124,17 @@ def planning_event_msg(
         from_cache=result.from_cache,
         ee_path=response.ee_path,
     )
+
+
+def command_msg(q: np.ndarray) -> JointState:
+    """sensor_msgs/JointState reference of the 7 arm joints [rad]."""
+    return JointState(name=list(ARM_JOINTS), position=[float(v) for v in q])
+
+
+def xyzquat_pose_msg(xyzquat: np.ndarray) -> Pose:
+    """xyz [m] + quaternion xyzw (7,) → Pose."""
+    pose = Pose()
+    pose.position.x, pose.position.y, pose.position.z = (float(v) for v in xyzquat[:3])
+    o = pose.orientation
+    o.x, o.y, o.z, o.w = (float(v) for v in xyzquat[3:])
+    return pose

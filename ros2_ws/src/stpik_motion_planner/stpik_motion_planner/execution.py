@@ -14,6 +14,10 @@ goal) stops the arm at once with an empty trajectory on ``trajectory_topic`` (th
 position), and the running execution ends with ``EXECUTION_FAILED`` "execution canceled" within
 one 20 ms poll; no further segment is sent (the check and the publication of a segment are
 atomic with the stop).
+
+A grasp refused by the attach service (``success=false``) is answered ``GRASP_FAILED`` after the
+arm went back along the approach (:mod:`.undo`, #32); an attach service that does not answer
+stays ``EXECUTION_FAILED``.
 """
 
 from __future__ import annotations
@@ -40,6 +44,7 @@ from stpik_motion_planner.conversions import trajectory_msg
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.scene_checks import format_id
 from stpik_motion_planner.state_watch import SilenceWatch, arrived
+from stpik_motion_planner.undo import UNDONE, reversed_samples
 
 STATE_QOS = QoSProfile(depth=10)
 ENDPOINTS = {  # read-only parameters of the node: name -> (default, description)
@@ -56,6 +61,7 @@ ENDPOINTS = {  # read-only parameters of the node: name -> (default, description
 }
 ATTACH_SERVICE_WAIT_S = 5.0  # longest wait for the attach service to appear [s]
 ATTACH_ANSWER_WAIT_S = 10.0  # longest wait for its answer [s]
+REFUSED, NO_ANSWER = 'refused', 'no answer'  # attach call outcomes besides ''
 
 
 class TrajectoryExecution:
@@ -174,18 +180,37 @@ class TrajectoryExecution:
                     reason=Reason.EXECUTION_FAILED,
                     message=f'the sim did not reach sample {end}: {failure}',
                 )
-            if (
-                attach is not None
-                and not self._canceled.is_set()
-                and not self._call_attach(object_id, attach)
-            ):
+            if attach is None or self._canceled.is_set():
+                continue
+            outcome, text = self._attach_call(object_id, attach)
+            if outcome == REFUSED and attach:  # #32: undone, the caller may re-plan
+                return self._grasp_failed(result, object_id, text)
+            if outcome:
                 return dataclasses.replace(
                     result,
                     feasible=False,
                     reason=Reason.EXECUTION_FAILED,
-                    message=f'attach_object({format_id(object_id)}, {attach}) failed',
+                    message=f'attach_object({format_id(object_id)}, {attach}) failed: {text}',
                 )
         return result
+
+    def _grasp_failed(self, result: PlanResult, object_id: str, text: str) -> PlanResult:
+        """Open loop: back along the approach to its first sample; GRASP_FAILED (#32)."""
+        why = f'the attach service refused {format_id(object_id)}: {text}'
+        t_grasp = result.times[result.grasp_index]
+        times, joints = reversed_samples(result.times, result.joint_trajectory, t_grasp, 0.0)
+        with self._stop_lock:
+            if not self._canceled.is_set():
+                self._trajectory_pub.publish(trajectory_msg(times, joints))
+        failure = self._reach(joints[-1], times[-1])
+        if failure:
+            why = f'{why}; the arm could not go back: {failure}'
+            return dataclasses.replace(
+                result, feasible=False, reason=Reason.EXECUTION_FAILED, message=why
+            )
+        return dataclasses.replace(
+            result, feasible=False, reason=Reason.GRASP_FAILED, message=f'{why}; {UNDONE}'
+        )
 
     def _reach(self, q_goal: np.ndarray, duration: float) -> str:
         """Wait until the arm is at rest at ``q_goal`` [rad], ``duration`` [s] being the segment's
@@ -220,16 +245,30 @@ class TrajectoryExecution:
 
     def _call_attach(self, object_id: str, attach: bool) -> bool:
         """Attach (True) or release (False) ``object_id``; whether the simulator agreed."""
+        return not self._attach_call(object_id, attach)[0]
+
+    def _attach_call(
+        self, object_id: str, attach: bool, status: int = ObjectState.STATUS_RELOCATED
+    ) -> tuple[str, str]:
+        """Attach or release ``object_id`` (``status``: ObjectState.STATUS_* after a release).
+
+        Returns:
+            ``('', message)`` when done, ``(REFUSED, message)`` when the server answered
+            ``success=false`` (a failed grasp: #32), ``(NO_ANSWER, why)`` otherwise.
+        """
         if not self._attach.wait_for_service(timeout_sec=ATTACH_SERVICE_WAIT_S):
-            return False
+            return NO_ANSWER, f'{self.endpoints["attach_service"]} not available'
         request = AttachObject.Request(
-            object_id=object_id, attach=attach, status_after_release=ObjectState.STATUS_RELOCATED
+            object_id=object_id, attach=attach, status_after_release=status
         )
         future = self._attach.call_async(request)
         deadline = time.monotonic() + ATTACH_ANSWER_WAIT_S
         while not future.done() and time.monotonic() < deadline:
             time.sleep(0.01)
-        return future.done() and future.result() is not None and future.result().success
+        if not future.done() or future.result() is None:
+            return NO_ANSWER, f'no answer in {ATTACH_ANSWER_WAIT_S:g} s'
+        answer = future.result()
+        return ('' if answer.success else REFUSED), answer.message
 
 
 def arm_speed(msg: JointState) -> float | None:

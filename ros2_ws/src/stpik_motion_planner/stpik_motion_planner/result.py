@@ -33,6 +33,8 @@ class Reason(IntEnum):
     TIMEOUT = 301
     EXECUTION_FAILED = 302
     PLANNER_BUSY = 303  # not planned: the queue was full; ask again later (#18)
+    SCENE_CHANGED = 304  # the scene changed under the execution; undone, re-plan (#32)
+    GRASP_FAILED = 305  # the attach service refused the grasp; undone, re-plan (#32)
 
 
 def _empty(*shape: int) -> np.ndarray:

@@ -1,0 +1,49 @@
+"""Scene differences (#32): moved, added, removed, reshaped; tolerances; in-clutter filter."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from qtree_scene.changes import changed_ids, clutter_objects, scene_changes
+from qtree_scene.conversions import scene_msg
+from qtree_scene.scenario import load_scenario
+
+
+def objects() -> dict:
+    return {o.id: o for o in load_scenario('s1').objects}
+
+
+def test_an_unchanged_scene_has_no_change() -> None:
+    assert scene_changes(objects(), objects()) == []
+
+
+def test_moves_below_the_tolerance_and_cylinder_yaws_are_no_change() -> None:
+    after = objects()
+    o1 = after['O1']
+    after['O1'] = dataclasses.replace(o1, position=(o1.position[0] + 5e-4, *o1.position[1:]))
+    after['O2'] = dataclasses.replace(after['O2'], yaw=1.0)
+    assert scene_changes(objects(), after) == []
+
+
+def test_each_kind_of_change_is_named() -> None:
+    before, after = objects(), objects()
+    o5 = after['O5']
+    after['O5'] = dataclasses.replace(o5, position=(0.7, 0.0, o5.position[2]))
+    del after['O4']
+    after['O2'] = dataclasses.replace(after['O2'], radius=0.04)
+    after['X1'] = dataclasses.replace(o5, id='X1')
+    changes = scene_changes(before, after)
+    assert changes == [
+        "'O2' changed shape or role",
+        "'O4' removed",
+        f"'O5' moved {((0.9 - 0.7) ** 2 + 0.07**2) ** 0.5:.3f} m",
+        "'X1' added",
+    ]
+    assert changed_ids(changes) == ['O2', 'O4', 'O5', 'X1']
+
+
+def test_clutter_objects_leave_out_relocated_grasped_and_ignored_ones() -> None:
+    scenario = load_scenario('s1')
+    msg = scene_msg(scenario, statuses={'O1': 'relocated', 'O2': 'grasped'})
+    ids = set(clutter_objects(msg, ignore={'O3'}))
+    assert ids == {o.id for o in scenario.objects} - {'O1', 'O2', 'O3'}
