@@ -63,6 +63,7 @@ REASONS = {
     203: 'JOINT_LIMIT', 204: 'SELF_COLLISION', 205: 'SCENE_COLLISION',
     206: 'VERIFICATION_FAILED', 207: 'NO_PLACEMENT', 208: 'OBJECT_TOO_BIG',
     209: 'CARRIED_COLLISION', 301: 'TIMEOUT', 302: 'EXECUTION_FAILED', 303: 'PLANNER_BUSY',
+    304: 'SCENE_CHANGED', 305: 'GRASP_FAILED',
 }  # fmt: skip
 TOPICS = ('/robot_description', '/joint_states', '/scene', '/motion_planner/events', '/qtree',
           '/training_stats', '/motion_planner/tracking')  # fmt: skip

@@ -82,10 +82,7 @@ def validate_request(scenario: Scenario, object_id: object, relocated: Sequence[
             static object, the target among the relocated), ``UNKNOWN_OBJECT``,
             ``ALREADY_RELOCATED``.
     """
-    if not isinstance(object_id, str) or not object_id.strip():
-        raise InvalidRequest(Reason.INVALID_REQUEST, 'object_id must be a non-empty string')
-    if any(not isinstance(r, str) or not r.strip() for r in relocated):
-        raise InvalidRequest(Reason.INVALID_REQUEST, 'relocated_ids must be non-empty strings')
+    check_ids_given(object_id, relocated)
     known = {o.id: o for o in scenario.objects}
     for name in [object_id, *relocated]:
         if name not in known:
@@ -116,6 +113,18 @@ def validate_request(scenario: Scenario, object_id: object, relocated: Sequence[
             Reason.INVALID_REQUEST,
             f'the target {target!r} cannot be among relocated_ids (relocating it ends the task)',
         )
+
+
+def check_ids_given(object_id: object, relocated: Sequence[object]) -> None:
+    """The checks of a request that need no scene: every id a non-empty string.
+
+    Raises:
+        InvalidRequest: (``INVALID_REQUEST``) an empty or non-string id.
+    """
+    if not isinstance(object_id, str) or not object_id.strip():
+        raise InvalidRequest(Reason.INVALID_REQUEST, 'object_id must be a non-empty string')
+    if any(not isinstance(r, str) or not r.strip() for r in relocated):
+        raise InvalidRequest(Reason.INVALID_REQUEST, 'relocated_ids must be non-empty strings')
 
 
 def check_request_size(object_id: str, relocated: Sequence[object]) -> None:

@@ -40,9 +40,10 @@ from qtree_scene.message import scenario_from_msg
 from qtree_scene.scene import ObjectSpec
 
 from stpik_motion_planner.config import PlannerConfig
-from stpik_motion_planner.exceptions import MotionPlannerError
+from stpik_motion_planner.exceptions import InvalidRequest, MotionPlannerError
 from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import PlanResult, Reason
+from stpik_motion_planner.scene_checks import check_ids_given
 
 MAX_WAITING_PLANS = 8  # requests waiting for or holding the planner at once [-]
 
@@ -126,6 +127,10 @@ class PlannerService:
             scene_wait_s: longest wait from ``received`` for a first scene, or for the scene named
                 ``scene_name`` [s].
         """
+        try:  # answered at once, scene or not (CI of 9ffde18: the nodes' probe waited 5 s)
+            check_ids_given(object_id, relocated)
+        except InvalidRequest as err:
+            return PlanResult(False, err.reason, str(err))
         planner = self._wait_for_scene(scene_name, received + scene_wait_s)
         if planner is None:
             return self._no_planner()

@@ -92,3 +92,13 @@ def test_no_scene_is_answered_after_scene_wait_s_and_a_rejected_scene_at_once() 
     started = time.monotonic()
     assert service.answer('T', [], started, 10.0, '', 30.0).reason == Reason.INVALID_SCENE
     assert time.monotonic() - started < 5.0
+
+
+def test_a_request_without_an_object_id_is_answered_at_once_without_a_scene() -> None:
+    """The nodes' probe (empty object id) waited scene_wait_s for a scene and was never answered
+    within its 2 s attempts (suite of 9ffde18): bad requests need no scene."""
+    service, _ = _service()
+    started = time.monotonic()
+    answer = service.answer('', [], started, 10.0, '', scene_wait_s=30.0)
+    assert answer.reason == Reason.INVALID_REQUEST and 'object_id' in answer.message
+    assert time.monotonic() - started < 1.0
