@@ -62,6 +62,7 @@ def main() -> None:
     # At the executor's stop distance, like the planner's own check (#29).
     verifier = TrajectoryVerifier(Jaco2Model(), clearance_m=STOP_CLEARANCE_M)
     rows, results, peer_runs, checked = [], [], [], []
+    determinism = {'questions': 0, 'changed_answers': 0, 'changed': []}
     step_times: list[tuple[float, float, float]] = []  # per STPIK step (solve, kin., coll.) [s]
     for scene in tqdm(scenes, desc='scenes'):
         planner = MotionPlanner(scene)
@@ -75,6 +76,8 @@ def main() -> None:
         results += [r for _, r in scene_results]
         planner_s = time.perf_counter() - start
         checked.append(verification.verify_results(scene, scene_results, verifier))
+        if scene.name in ('s1', 's2'):  # the same questions again, reversed, in a new planner
+            _ask_again(scene, scene_results, determinism)
         feasible = [(k, r) for k, r in scene_results if r.feasible]
         chosen = random.Random(1).sample(feasible, min(peer_paths, len(feasible)))
         for key, result in chosen:
@@ -115,6 +118,7 @@ def main() -> None:
             'success_rate': stpik.get('success_with_clearance'),
         },
         'checks': figures.check_summary(results),
+        'determinism': determinism,
         'stpik_step_us': _step_summary(step_times),
         'peers': peer_figures,
         'peer_settings': {
@@ -139,6 +143,26 @@ def main() -> None:
     markdown = report.render(summary) + report.notes(summary) + _step_note(summary)
     (OUT / 'motion_planner.md').write_text(markdown)
     print(markdown)
+
+
+def _ask_again(scene, scene_results: list, out: dict) -> None:
+    """Ask the cached questions of ``scene`` again in reverse order in a fresh planner (#29:
+    the answer must not depend on what was asked before); count answers whose reason or
+    trajectory changed (TIMEOUT answers are not cached, so never compared)."""
+    again = MotionPlanner(scene)
+    again.blockers.annotate = lambda result, *_: result
+    for (relocated, object_id), first in reversed(scene_results):
+        second = again.plan(object_id, sorted(relocated))
+        if second.reason == Reason.TIMEOUT:  # the machine, not the question: not compared
+            out['timeouts'] = out.get('timeouts', 0) + 1
+            continue
+        out['questions'] += 1
+        same = second.reason == first.reason and np.array_equal(
+            second.joint_trajectory, first.joint_trajectory
+        )
+        if not same:
+            out['changed_answers'] += 1
+            out['changed'].append(f'{scene.name} {object_id} after {sorted(relocated)}')
 
 
 def _before_after(before: dict, after: dict) -> dict:

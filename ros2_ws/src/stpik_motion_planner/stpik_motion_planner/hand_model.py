@@ -15,11 +15,13 @@ The hand is therefore 0.20 m wide over its front 9 cm and 0.105 m wide behind.
 from __future__ import annotations
 
 import itertools
+import math
 
 import fcl
 import numpy as np
 import pinocchio as pin
 from jaco2_description.model import EE_FRAME, Jaco2Model
+from qtree_scene.scene import ObjectSpec
 from scipy.spatial import ConvexHull
 
 RING_POINTS = 24  # polygon inscribed in a cylinder's circle (under by r·(1 − cos(π/24)) ≈ 1 %)
@@ -52,6 +54,21 @@ def open_hand_box(robot: Jaco2Model) -> tuple[np.ndarray, np.ndarray]:
     """Axis-aligned box (lower, upper) [m] (3,) in the EE frame containing the open hand."""
     points = np.vstack(list(hand_points(robot).values()))
     return points.min(axis=0), points.max(axis=0)
+
+
+def grasp_width(obj: ObjectSpec, approach_yaw: float) -> float:
+    """Width of ``obj`` across the fingers of a side grasp approaching at ``approach_yaw`` [m].
+
+    The fingers close along the EE x axis, horizontal and perpendicular to the approach:
+    v = (−sin yaw, cos yaw). A cylinder is 2r across whatever the yaw; an upright box of edges
+    (sx, sy) turned by its own yaw θ spans |sx·(v·u)| + |sy·(v·w)| with u = (cos θ, sin θ),
+    w = (−sin θ, cos θ) (#30: only the box's narrower side was compared with the opening, so a
+    box 95-148 mm across at the chosen approach was "grasped").
+    """
+    if obj.shape == 'cylinder':
+        return 2.0 * obj.radius
+    across = approach_yaw + math.pi / 2 - obj.yaw  # the closing direction in the box's frame
+    return abs(obj.size[0] * math.cos(across)) + abs(obj.size[1] * math.sin(across))
 
 
 def finger_opening(robot: Jaco2Model) -> float:

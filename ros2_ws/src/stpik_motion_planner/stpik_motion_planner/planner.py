@@ -54,7 +54,7 @@ from stpik_motion_planner.exceptions import (
     SelfCollision,
     VerificationFailed,
 )
-from stpik_motion_planner.hand_model import HandModel
+from stpik_motion_planner.hand_model import HandModel, grasp_width
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.robust_stpik import RobustStpik
 from stpik_motion_planner.scene_checks import validate_request, validate_scenario
@@ -204,6 +204,16 @@ class MotionPlanner:
             # RRTConnect transits). Same feasibility as one pass with fallbacks, far faster.
             sampled = []
             for yaw in yaws:
+                width = grasp_width(obj, yaw)
+                if width > HAND_OPENING_M:  # #30: the width at THIS approach, boxes at any yaw
+                    failures.append(
+                        ObjectTooBig(
+                            f'{obj.id!r} is {width * 1000:.0f} mm across the fingers at yaw '
+                            f'{yaw:.2f} rad, the open hand closes on at most '
+                            f'{HAND_OPENING_M * 1000:.0f} mm'
+                        )
+                    )
+                    continue
                 t0 = time.perf_counter()
                 path = self._sample(sampler, scene, obj, yaw, slot, slot_yaw, failures)
                 timings['sampling'] += time.perf_counter() - t0
@@ -540,7 +550,10 @@ def _unplaceable(scenario: Scenario, obj: ObjectSpec, index: int) -> MotionPlann
 
 
 def _most_informative(failures: list[MotionPlannerError], object_id: str) -> MotionPlannerError:
-    """A verifier rejection first, else the first STPIK failure, else the first sampling one."""
+    """A verifier rejection first, else the first STPIK failure, else the first sampling one;
+    OBJECT_TOO_BIG (an approach at which the object is too wide) only when every approach was."""
+    others = [err for err in failures if not isinstance(err, ObjectTooBig)]
+    failures = others or failures
     for err in failures:
         if isinstance(err, VerificationFailed):
             return err

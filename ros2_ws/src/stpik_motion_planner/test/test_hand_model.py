@@ -161,3 +161,36 @@ def test_grasp_height_constants_bound_the_hand(hand):
 
     lowest = max(float(np.max(np.abs(p[:, 1]))) for p in hand.parts.values())
     assert lowest <= HAND_HALF_HEIGHT_M <= HAND_BELOW_EE_M
+
+
+def test_grasp_width_is_the_width_across_the_fingers_at_the_approach():
+    """#30: a 60 x 140 mm box was graspable by its narrow side at any approach yaw."""
+    import math
+
+    from stpik_motion_planner.hand_model import grasp_width
+
+    box = ObjectSpec('B', 'obstacle', 'box', (0.6, 0.0, 0.07), size=(0.06, 0.14, 0.14))
+    assert grasp_width(box, 0.0) == pytest.approx(0.14)  # approach along x: fingers along y
+    assert grasp_width(box, math.pi / 2) == pytest.approx(0.06)
+    turned = ObjectSpec('B', 'obstacle', 'box', (0.6, 0.0, 0.07), yaw=math.pi / 4,
+                        size=(0.06, 0.06, 0.14))  # fmt: skip
+    assert grasp_width(turned, 0.0) == pytest.approx(0.06 * math.sqrt(2))  # across the diagonal
+    can = ObjectSpec('C', 'obstacle', 'cylinder', (0.6, 0.0, 0.07), radius=0.03, height=0.12)
+    assert grasp_width(can, 1.234) == pytest.approx(0.06)
+
+
+def test_a_box_turned_45_degrees_is_not_grasped_across_its_diagonal(make_scenario, robot):
+    """#30: a 70 mm square box turned 45° is 99 mm across the fingers of every approach facing
+    away from the base (within 0.45 rad of it): wider than the 82 mm the hand closes on, though
+    its side (70 mm) fits. The planner answered feasible before."""
+    import math
+
+    box = ObjectSpec('T', 'target', 'box', (0.6, 0.0, 0.07), yaw=math.pi / 4,
+                     size=(0.07, 0.07, 0.14))  # fmt: skip
+    planner = MotionPlanner(make_scenario(box), model=robot)
+    near = [y for y in (0.0, 0.2, -0.2, 0.4, -0.4)]
+    result = planner.plan('T', [], yaws=near)
+    assert not result.feasible and result.reason == Reason.OBJECT_TOO_BIG, result.message
+    assert 'across the fingers' in result.message
+    square = planner.plan('T', [], yaws=[math.pi / 4])  # across its side: 70 mm
+    assert square.reason != Reason.OBJECT_TOO_BIG
