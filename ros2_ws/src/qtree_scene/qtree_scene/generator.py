@@ -125,8 +125,11 @@ def _draw_shapes(
 ) -> list[Shape]:
     """Cylinders of radius in ``radius_range``; boxes with edges in 2 × ``radius_range``.
 
-    The first shape's half widths are clipped to ``HAND_OPENING_M`` / 2, so that every scene has
-    an object the hand can close on (the target's candidates, :func:`_pick_target`).
+    The first shape's half widths are clipped to ``HAND_OPENING_M`` / 2, and a box's footprint
+    diagonal to ``HAND_OPENING_M``, so that every scene has an object the hand can close on from
+    any approach yaw (the target's candidates, :func:`_pick_target`; #30: the planner now
+    compares the width across the fingers at the approach, and an 82 x 75 mm target at a random
+    yaw was 83-111 mm across at every approach but the two side ones).
     """
     shapes = []
     for index in range(n):
@@ -136,6 +139,8 @@ def _draw_shapes(
         if index == 0:
             radius, sx, sy = (min(v, HAND_OPENING_M / 2) for v in (radius, sx / 2, sy / 2))
             sx, sy = 2 * sx, 2 * sy
+            shrink = min(1.0, HAND_OPENING_M / math.hypot(sx, sy))
+            sx, sy = sx * shrink, sy * shrink
         height = float(rng.uniform(*height_range))
         if box:
             shapes.append(Shape(True, 0.0, sx, sy, height))
