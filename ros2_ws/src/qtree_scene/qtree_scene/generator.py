@@ -139,8 +139,10 @@ def _draw_shapes(
         if index == 0:
             radius, sx, sy = (min(v, HAND_OPENING_M / 2) for v in (radius, sx / 2, sy / 2))
             sx, sy = 2 * sx, 2 * sy
-            shrink = min(1.0, HAND_OPENING_M / math.hypot(sx, sy))
-            sx, sy = sx * shrink, sy * shrink
+            if math.hypot(sx, sy) > HAND_OPENING_M:  # the longer edge gives way, the shorter
+                short = min(sx, sy, HAND_OPENING_M / math.sqrt(2.0))  # stays in its range
+                long = math.sqrt(HAND_OPENING_M**2 - short**2) * (1.0 - 1e-9)
+                sx, sy = (short, long) if sx <= sy else (long, short)
         height = float(rng.uniform(*height_range))
         if box:
             shapes.append(Shape(True, 0.0, sx, sy, height))
