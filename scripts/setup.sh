@@ -84,4 +84,11 @@ else
   ) || { tail -40 "$ROOT/ros2_ws/build.log" >&2; die "colcon build failed (full log: ros2_ws/build.log)"; }
   echo "$want_build" > "$BUILD_STAMP"
 fi
+
+# --- 4. compiled kernels -------------------------------------------------------------------------
+# numba compiles the motion planner's hot-path kernels once (about 10 s) and caches them beside
+# the source; done here so that no node start or test pays for it.
+say "compiling the motion planner's kernels (numba, cached)"
+( cd "$ROOT" && . ./env.sh >/dev/null && python -c "import stpik_motion_planner.kernels" ) \
+  || die "could not compile stpik_motion_planner/kernels.py (numba)"
 say "done. Use it with:  . ./env.sh"

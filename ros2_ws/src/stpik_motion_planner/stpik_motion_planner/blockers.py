@@ -238,8 +238,5 @@ class BlockerFinder:
     def _near(self, q: np.ndarray, scene: SceneWorld) -> list:
         """(arm body, object) pairs closer than :data:`NEAR_MARGIN_M` at ``q`` [rad] (7,)."""
         s = self.planner.stpik
-        pin.forwardKinematics(s.model, s.data, q)
-        pin.updateFramePlacements(s.model, s.data)
-        pin.updateGeometryPlacements(s.model, s.data, s.geometry_model, s.geometry_data)
-        s.bodies.place(s.geometry_data.oMg, s.data.oMf[s.ee_frame])
+        s.place_bodies(q)
         return s.bodies.scene_proximities(scene, NEAR_MARGIN_M)

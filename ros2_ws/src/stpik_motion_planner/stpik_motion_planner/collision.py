@@ -19,6 +19,8 @@ import numpy as np
 import pinocchio as pin
 from qtree_scene.scene import ObjectSpec
 
+from stpik_motion_planner.kernels import scene_candidates, self_candidates
+
 _REQUEST = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
 _NO_DISTANCE = sys.float_info.max  # min_distance of an empty fcl.DistanceResult [m]
 
@@ -109,9 +111,9 @@ class SceneWorld:
         specs = list(self.objects.values())
         self.ids = [obj.id for obj in specs]
         self.centres = np.array([obj.position for obj in specs], dtype=float).reshape(-1, 3)
-        self.cos = np.array([math.cos(obj.yaw) for obj in specs])
-        self.sin = np.array([math.sin(obj.yaw) for obj in specs])
-        self.half = np.array([_half_extents(obj) for obj in specs]).reshape(-1, 3)
+        self.cos = np.array([math.cos(obj.yaw) for obj in specs], dtype=float)
+        self.sin = np.array([math.sin(obj.yaw) for obj in specs], dtype=float)
+        self.half = np.array([_half_extents(obj) for obj in specs], dtype=float).reshape(-1, 3)
         self.bodies = self._keep
 
     @property
@@ -203,11 +205,11 @@ class RobotBodies:
         # What is carried (object, pose in the EE frame, settle), hashable: None when nothing.
         self.attach_key: tuple | None = None
         self.attached_radius = 0.0  # bounding radius of the carried object [m]
-        self._attached_offset = pin.SE3.Identity()
+        self._attached_offset = np.eye(4)  # the carried object's pose in the EE frame
         self._transforms.append(fcl.Transform())  # the carried object's
         self._placed = np.zeros(len(self.bodies) + 1, dtype=bool)
-        self._oMg: list[pin.SE3] = []
-        self._world_obj = pin.SE3.Identity()
+        # World placement of every body, homogeneous [m] (G + 1, 4, 4), last: the carried object.
+        self._placements = np.tile(np.eye(4), (len(self.bodies) + 1, 1, 1))
         self._build_managers()
 
     def _build_managers(self) -> None:
@@ -222,17 +224,17 @@ class RobotBodies:
             for j in range(i + 1, len(names))
             if present[i] and present[j] and frozenset((names[i], names[j])) in self._allowed
         ]
-        self._pair_a = np.array([i for i, _ in pairs], dtype=int)
-        self._pair_b = np.array([j for _, j in pairs], dtype=int)
+        self._pair_a = np.array([i for i, _ in pairs], dtype=np.int64)
+        self._pair_b = np.array([j for _, j in pairs], dtype=np.int64)
         self._pair_names = [(names[i], names[j]) for i, j in pairs]
         self._objects = [*self.bodies, self.attached]
-        self._all_radii = np.r_[self._radii, self.attached_radius]
+        self._all_radii = np.ascontiguousarray(np.r_[self._radii, self.attached_radius], float)
         # Bodies checked against the scene: every link but the base and link 1, and the carried
         # object.
         self._scene_index = np.array(
             [i for i, n in enumerate(self.link_names) if _short(n) not in _NOT_VS_SCENE]
             + ([len(self.bodies)] if self.attached is not None else []),
-            dtype=int,
+            dtype=np.int64,
         )
         self._scene_names = [names[i] for i in self._scene_index]
 
@@ -256,7 +258,7 @@ class RobotBodies:
         across = obj.radius if obj.shape == 'cylinder' else 0.5 * math.hypot(*obj.size[:2])
         self.attached_radius = math.hypot(across, height / 2)
         self.attached = fcl.CollisionObject(geometry, fcl.Transform())
-        self._attached_offset = transform_obj_to_ee
+        self._attached_offset = np.array(transform_obj_to_ee.homogeneous)
         self.attach_key = (obj, transform_obj_to_ee.homogeneous.tobytes(), float(settle_m))
         self._build_managers()
 
@@ -267,20 +269,25 @@ class RobotBodies:
             self.attach_key = None
             self._build_managers()
 
-    def place(self, oMg: list[pin.SE3], world_ee: pin.SE3) -> None:
-        """Move the bodies to the geometry placements ``oMg`` and the EE pose ``world_ee``.
+    def place(self, placements: np.ndarray, world_ee: np.ndarray) -> None:
+        """Move the bodies to their world placements and the carried object with the EE.
 
         Only the centres are stored here; a body's fcl transform is set when a query first
         needs it (most bodies are far from everything and never reach fcl).
+
+        Args:
+            placements: world placement of each body, homogeneous [m] (G, 4, 4)
+                (:func:`.kernels.chain_placements`).
+            world_ee: the EE pose in the world frame, homogeneous [m] (4, 4).
         """
-        self._oMg = oMg
-        centres = self._centres
-        for index, placement in enumerate(oMg):
-            centres[index] = placement.translation
+        count = len(self.bodies)
+        self._placements[:count] = placements
+        self._centres[:count] = placements[:, :3, 3]
         self._placed[:] = False
         if self.attached is not None:
-            self._world_obj = world_ee * self._attached_offset
-            centres[-1] = self._world_obj.translation
+            world_obj = world_ee @ self._attached_offset
+            self._placements[count] = world_obj
+            self._centres[count] = world_obj[:3, 3]
 
     @property
     def centres(self) -> np.ndarray:
@@ -299,10 +306,10 @@ class RobotBodies:
     def _body(self, index: int) -> fcl.CollisionObject:
         """The fcl object of body ``index`` (the carried object: ``len(bodies)``), placed."""
         if not self._placed[index]:
-            placement = self._world_obj if index == len(self.bodies) else self._oMg[index]
+            placement = self._placements[index]
             tf = self._transforms[index]
-            tf.setRotation(placement.rotation)
-            tf.setTranslation(placement.translation)
+            tf.setRotation(placement[:3, :3])
+            tf.setTranslation(placement[:3, 3])
             self._objects[index].setTransform(tf)
             self._placed[index] = True
         return self._objects[index]
@@ -316,10 +323,8 @@ class RobotBodies:
         a, b = self._pair_a, self._pair_b
         if a.size == 0:
             return []
-        gap = np.linalg.norm(self._centres[a] - self._centres[b], axis=1)
-        gap -= self._all_radii[a] + self._all_radii[b]
         found: list[Proximity] = []
-        for k in np.flatnonzero(gap < threshold):
+        for k in self_candidates(self._centres, self._all_radii, a, b, threshold, False):
             result = self._fresh_result()
             body_a, body_b = self._body(int(a[k])), self._body(int(b[k]))
             distance = fcl.distance(body_a, body_b, _REQUEST, result)
@@ -338,28 +343,31 @@ class RobotBodies:
         a, b = self._pair_a, self._pair_b
         if a.size == 0:
             return True
-        gap = np.linalg.norm(self._centres[a] - self._centres[b], axis=1)
-        gap -= self._all_radii[a] + self._all_radii[b]
-        for k in np.flatnonzero(gap <= threshold):
+        for k in self_candidates(self._centres, self._all_radii, a, b, threshold, True):
             result = self._fresh_result()
             body_a, body_b = self._body(int(a[k])), self._body(int(b[k]))
             if fcl.distance(body_a, body_b, _REQUEST, result) <= threshold:
                 return False
         return True
 
-    def _scene_bounds(self, scene: SceneWorld) -> tuple[np.ndarray, np.ndarray]:
-        """(body indices (B,), lower bound of each (body, object) distance [m] (B, O)).
-
-        The distance from the body's centre to a box around the object in the object's frame,
-        minus the body's bounding radius; the base is skipped.
-        """
-        index = self._scene_index
-        delta = self._centres[index][:, None, :] - scene.centres[None]  # (B, O, 3)
-        x = delta[..., 0] * scene.cos + delta[..., 1] * scene.sin
-        y = delta[..., 1] * scene.cos - delta[..., 0] * scene.sin
-        local = np.stack([x, y, delta[..., 2]], axis=-1)
-        outside = np.maximum(np.abs(local) - scene.half[None], 0.0)
-        return index, np.linalg.norm(outside, axis=-1) - self._all_radii[index][:, None]
+    def _scene_candidates(
+        self, scene: SceneWorld, threshold: float, inclusive: bool
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(rows into the scene-checked bodies, object indices) of the pairs whose lower bound
+        is below ``threshold`` [m] (at or below with ``inclusive``): the distance from the
+        body's centre to a box around the object in the object's frame, minus the body's
+        bounding radius (:func:`.kernels.scene_candidates`); the base is skipped."""
+        return scene_candidates(
+            self._centres,
+            self._all_radii,
+            self._scene_index,
+            scene.centres,
+            scene.cos,
+            scene.sin,
+            scene.half,
+            threshold,
+            inclusive,
+        )
 
     def scene_clear(self, scene: SceneWorld, threshold: float) -> bool:
         """True when every (body, scene object) pair is more than ``threshold`` [m] apart.
@@ -368,8 +376,8 @@ class RobotBodies:
         """
         if not scene.objects:
             return True
-        index, bound = self._scene_bounds(scene)
-        for body, obj in zip(*np.nonzero(bound <= threshold), strict=True):
+        index = self._scene_index
+        for body, obj in zip(*self._scene_candidates(scene, threshold, True), strict=True):
             result = self._fresh_result()
             robot = self._body(int(index[body]))
             if fcl.distance(robot, scene.bodies[obj], _REQUEST, result) <= threshold:
@@ -386,9 +394,9 @@ class RobotBodies:
         """
         if not scene.objects:
             return []
-        index, bound = self._scene_bounds(scene)
+        index = self._scene_index
         found: list[Proximity] = []
-        for body, obj in zip(*np.nonzero(bound < threshold), strict=True):
+        for body, obj in zip(*self._scene_candidates(scene, threshold, False), strict=True):
             result = self._fresh_result()
             robot = self._body(int(index[body]))
             distance = fcl.distance(robot, scene.bodies[obj], _REQUEST, result)

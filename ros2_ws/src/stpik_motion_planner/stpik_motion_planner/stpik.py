@@ -29,6 +29,7 @@ from stpik_motion_planner.exceptions import (
     SceneCollision,
     SelfCollision,
 )
+from stpik_motion_planner.kernels import chain_placements, solve_levels
 from stpik_motion_planner.tasks import (
     EePoseTask,
     JointLimitTask,
@@ -106,7 +107,7 @@ def solve_hierarchy(levels: Sequence[TaskRows], n: int, damping: float, threshol
     The velocity term uses the damped pseudo-inverse ^†_λ (:func:`damped_pinv`); the null-space
     projector uses the undamped, rank-truncated ^+ (:func:`truncated_pinv`), so N_i is an exact
     projector and a lower level never changes what a higher one achieves (strict priority), even
-    where damping acts.
+    where damping acts. Computed by :func:`.kernels.solve_levels` (one compiled call, #28).
 
     Args:
         levels: tasks in priority order (highest first), rows (J_i, K_i σ̃_i).
@@ -117,17 +118,14 @@ def solve_hierarchy(levels: Sequence[TaskRows], n: int, damping: float, threshol
     Returns:
         Joint step q̇ (already multiplied by dt) [rad], shape (n,).
     """  # noqa: E501
-    dq = np.zeros(n)
-    N = np.eye(n)
     used = [rows for rows in levels if rows.dim]
-    for index, rows in enumerate(used):
-        JN = rows.jacobian @ N
-        if index == len(used) - 1:  # the last level's projector is never used
-            return dq + damped_pinv(JN, damping, threshold) @ (rows.error - rows.jacobian @ dq)
-        damped, truncated = pinv_pair(JN, damping, threshold)
-        dq = dq + damped @ (rows.error - rows.jacobian @ dq)
-        N = N - truncated @ JN
-    return dq
+    if not used:
+        return np.zeros(n)
+    starts = np.zeros(len(used) + 1, dtype=np.int64)
+    starts[1:] = np.cumsum([rows.dim for rows in used])
+    jacobian = np.ascontiguousarray(np.vstack([rows.jacobian for rows in used]), dtype=float)
+    error = np.ascontiguousarray(np.concatenate([rows.error for rows in used]), dtype=float)
+    return solve_levels(jacobian, error, starts, damping, threshold, RANK_TOLERANCE)
 
 
 class Stpik:
@@ -144,6 +142,7 @@ class Stpik:
         self.data = self.model.createData()
         self.geometry_model = robot.geometry_model
         self.geometry_data = pin.GeometryData(self.geometry_model)
+        self._chain = _serial_chain(self.model, self.geometry_model)
         # Continuous joints (1, 3, 5, 7) have no limit: the model's ±2π is a modelling artefact.
         free = np.asarray(continuous_joints())
         self.lower = np.where(free, -np.inf, np.asarray(robot.limits.lower, dtype=float))
@@ -160,6 +159,10 @@ class Stpik:
         self._body_index = {name: i for i, name in enumerate(robot.collision_links)}
         self._body_index['attached'] = len(robot.collision_links)
         self.ee_frame = self.model.getFrameId(EE_FRAME)
+        frame = self.model.frames[self.ee_frame]
+        self._ee_joint = int(frame.parentJoint)
+        self._ee_in_joint = np.array(frame.placement.homogeneous)
+        self._frames = np.tile(np.eye(4), (self.model.njoints, 1, 1))  # oMi of the last place
         self.body_joint = {
             name: g.parentJoint
             for name, g in zip(
@@ -197,13 +200,9 @@ class Stpik:
     ) -> Kinematics:
         """Forward kinematics, Jacobians and pairs closer than activation + ``lookahead`` [m]."""
         pin.computeJointJacobians(self.model, self.data, q)
-        pin.updateFramePlacements(self.model, self.data)
-        pin.updateGeometryPlacements(
-            self.model, self.data, self.geometry_model, self.geometry_data
-        )
-        world_ee = self.data.oMf[self.ee_frame]
+        world_ee = pin.updateFramePlacement(self.model, self.data, self.ee_frame)
+        self.place_bodies(q)
         start = time.perf_counter()
-        self.bodies.place(self.geometry_data.oMg, world_ee)
         # Pairs up to LOOKAHEAD_M beyond activation: tasks use those inside it, the step bound
         # (:meth:`_step`) keeps the others from crossing the failure margin in one step.
         self_pairs = self.bodies.self_proximities(self.config.self_activation_m + lookahead)
@@ -414,7 +413,7 @@ class Stpik:
 
         To first order a step dq moves no point of body g farther than Σ_j |dq_j| R_{j,g}.
         """
-        frames = np.array([m.homogeneous for m in k.data.oMi[1:8]])  # joints 1..7 (7, 4, 4)
+        frames = self._frames[1:8]  # joints 1..7 at k (placed by kinematics) (7, 4, 4)
         origins = frames[:, :3, 3]  # (7, 3)
         axes = frames[:, :3, 2]  # RZ joints (7, 3)
         joints, radii = self._body_joint, self._body_radius
@@ -510,14 +509,16 @@ class Stpik:
         return out
 
     def place_bodies(self, q: np.ndarray) -> None:
-        """Place the collision bodies at ``q`` [rad] (7,): forward kinematics, frame and
-        geometry placements, no Jacobians (collision-only checks of transits and RRTConnect)."""
-        pin.forwardKinematics(self.model, self.data, q)
-        pin.updateFramePlacements(self.model, self.data)
-        pin.updateGeometryPlacements(
-            self.model, self.data, self.geometry_model, self.geometry_data
+        """Place the collision bodies at ``q`` [rad] (7,), for :meth:`kinematics` and the
+        collision-only checks of transits and RRTConnect: one compiled forward-kinematics call
+        (:func:`.kernels.chain_placements`, #28), no Pinocchio data touched, so a
+        configuration's bodies are placed the same way whichever check asks."""
+        chain = self._chain
+        frames, placements = chain_placements(
+            np.ascontiguousarray(q, dtype=float), chain[0], chain[1], chain[2]
         )
-        self.bodies.place(self.geometry_data.oMg, self.data.oMf[self.ee_frame])
+        self._frames = frames
+        self.bodies.place(placements, frames[self._ee_joint] @ self._ee_in_joint)
 
     def _check(
         self, k: Kinematics, index: int, target: pin.SE3, factor: float, active: list[str]
@@ -566,6 +567,29 @@ def joint_segment(q_a: np.ndarray, q_b: np.ndarray, step_rad: float) -> np.ndarr
     ``step_rad`` [rad] apart on every joint."""
     n = max(1, math.ceil(float(np.max(np.abs(q_b - q_a))) / step_rad))
     return np.array([q_a + (q_b - q_a) * t for t in np.arange(1, n + 1) / n])
+
+
+def _serial_chain(
+    model: pin.Model, geometry_model: pin.GeometryModel
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(jointPlacement of joints 1 … n (n, 4, 4), parent joint of each geometry (G,), its
+    placement in that joint (G, 4, 4)): the arguments of :func:`.kernels.chain_placements`.
+
+    Raises:
+        ValueError: the model is not a serial chain of revolute-z joints.
+    """
+    parents = list(model.parents)
+    names = [model.joints[j].shortname() for j in range(1, model.njoints)]
+    if parents[1:] != list(range(model.njoints - 1)) or any(n != 'JointModelRZ' for n in names):
+        raise ValueError(f'not a serial chain of revolute-z joints: {names}, parents {parents}')
+    joints = np.array([model.jointPlacements[j].homogeneous for j in range(1, model.njoints)])
+    parent = np.array([g.parentJoint for g in geometry_model.geometryObjects], dtype=np.int64)
+    placement = np.array([g.placement.homogeneous for g in geometry_model.geometryObjects])
+    return (
+        np.ascontiguousarray(joints, dtype=float),
+        parent,
+        np.ascontiguousarray(placement, dtype=float),
+    )
 
 
 def _bounding_radius(geometry: object) -> float:
