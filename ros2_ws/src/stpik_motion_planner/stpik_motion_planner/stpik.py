@@ -121,10 +121,14 @@ def solve_hierarchy(levels: Sequence[TaskRows], n: int, damping: float, threshol
     used = [rows for rows in levels if rows.dim]
     if not used:
         return np.zeros(n)
+    dims = [rows.dim for rows in used]
     starts = np.zeros(len(used) + 1, dtype=np.int64)
-    starts[1:] = np.cumsum([rows.dim for rows in used])
-    jacobian = np.ascontiguousarray(np.vstack([rows.jacobian for rows in used]), dtype=float)
-    error = np.ascontiguousarray(np.concatenate([rows.error for rows in used]), dtype=float)
+    starts[1:] = np.cumsum(dims)
+    jacobian = np.empty((int(starts[-1]), n))
+    error = np.empty(int(starts[-1]))
+    for rows, begin, end in zip(used, starts[:-1], starts[1:], strict=True):
+        jacobian[begin:end] = rows.jacobian
+        error[begin:end] = rows.error
     return solve_levels(jacobian, error, starts, damping, threshold, RANK_TOLERANCE)
 
 
@@ -235,15 +239,15 @@ class Stpik:
         posture = self.posture.compute(k)
         dq = solve_hierarchy([ee, posture], 7, c.damping, c.singular_threshold)
         candidates = []
-        for task in (self.joint_limits, self.self_hit, self.obstacles):
+        for task in self._may_activate(k):
             rows = task.compute(k)
             if rows.dim:
                 candidates.append((task.name, rows, np.zeros(rows.dim, dtype=bool)))
-        while True:
+        while candidates:
             added = False
             for _, rows, chosen in candidates:
                 out = ((rows.jacobian @ dq) * rows.error <= 0.0) & ~chosen
-                if np.any(out):
+                if out.any():
                     chosen |= out
                     added = True
             if not added:
@@ -251,11 +255,16 @@ class Stpik:
             levels = [
                 TaskRows(r.jacobian[m], r.error[m], tuple(np.asarray(r.labels)[m]))
                 for _, r, m in candidates
-                if np.any(m)
+                if m.any()
             ]
             dq = solve_hierarchy([*levels, ee, posture], 7, c.damping, c.singular_threshold)
-        active = [name for name, _, m in candidates if np.any(m)]
+        active = [name for name, _, m in candidates if m.any()]
         return dq, active
+
+    def _may_activate(self, k: Kinematics) -> list:
+        """The set-based tasks that can give a row at ``k`` (:meth:`SetBasedTask.may_activate`),
+        so that the usual step, with none outside its valid set, computes no task rows."""
+        return [t for t in (self.joint_limits, self.self_hit, self.obstacles) if t.may_activate(k)]
 
     def step(
         self,

@@ -146,3 +146,22 @@ def test_bodies_placed_by_the_kernel_find_the_pinocchio_distances(
                 assert abs(p.distance - r.distance) < 1e-5  # GJK tolerance of cylinders
                 compared += 1
     assert compared > 50  # close pairs were really compared
+
+
+def test_may_activate_is_false_only_where_a_task_gives_no_row(robot, make_scenario, make_cylinder):
+    """The STPIK step skips a set-based task when ``may_activate`` is False (#28): at random
+    configurations near the scene, that happens only where ``compute`` gives no row, and
+    each task does give rows somewhere (so the comparison is not vacuous)."""
+    stpik = Stpik(robot, PlannerConfig())
+    scenario = make_scenario(make_cylinder('a', 0.45, 0.0), make_cylinder('b', 0.35, 0.2))
+    scene = SceneWorld(scenario.objects)
+    rng = np.random.default_rng(11)
+    activated = dict.fromkeys(('joint_limits', 'self_hit', 'obstacles'), 0)
+    for _ in range(300):
+        q = np.asarray(scenario.home) + rng.normal(0.0, 1.2, 7)
+        k = stpik.kinematics(q, scene)
+        for task in (stpik.joint_limits, stpik.self_hit, stpik.obstacles):
+            rows = task.compute(k).dim
+            assert task.may_activate(k) or rows == 0
+            activated[task.name] += bool(rows)
+    assert all(activated.values()), activated

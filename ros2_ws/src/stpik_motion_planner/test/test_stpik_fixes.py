@@ -26,6 +26,9 @@ class _Stub:
     def compute(self, k):
         return self.rows
 
+    def may_activate(self, k):
+        return bool(self.rows.dim)
+
 
 def _row(values, error):
     return TaskRows(

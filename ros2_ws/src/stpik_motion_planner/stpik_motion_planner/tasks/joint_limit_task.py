@@ -27,6 +27,10 @@ class JointLimitTask(SetBasedTask):
         self._low, self._high = self.lower + margin, self.upper - margin  # thresholds [rad]
         self._labels = tuple(f'joint_{i + 1}' for i in range(len(self.lower)))
 
+    def may_activate(self, k: Kinematics) -> bool:
+        """Whether a joint is outside [lower + margin, upper − margin]."""
+        return bool(np.any(k.q < self._low) or np.any(k.q > self._high))
+
     def evaluate(self, k: Kinematics):
         """σ = q (7,), J = I (7, 7), thresholds at the limits ∓ margin."""
         return (

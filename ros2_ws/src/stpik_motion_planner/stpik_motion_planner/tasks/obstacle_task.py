@@ -17,6 +17,10 @@ class ObstacleTask(SetBasedTask):
         super().__init__(gain)
         self.activation = activation
 
+    def may_activate(self, k: Kinematics) -> bool:
+        """Whether a pair is closer than the activation distance."""
+        return any(p.distance < self.activation for p in k.scene_pairs)
+
     def evaluate(self, k: Kinematics):
         """Rows of the (body, object) pairs found closer than the activation distance."""
         # Only pairs below the activation distance can leave the valid set: rows of the others

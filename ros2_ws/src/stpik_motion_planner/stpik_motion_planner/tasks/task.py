@@ -103,6 +103,11 @@ class SetBasedTask(Task):
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, tuple[str, ...]]:
         """σ (m,), J (m, 7), σ_a,l (m,), σ_a,u (m,) and row labels at ``k``."""
 
+    def may_activate(self, k: Kinematics) -> bool:
+        """False only when :meth:`compute` gives no row at ``k`` (a cheap test: the STPIK step
+        skips the task then, #28); the default computes it."""
+        return bool(self.compute(k).dim)
+
     def compute(self, k: Kinematics) -> TaskRows:
         """Rows outside their activation range, each held at the crossed threshold."""
         sigma, jacobian, lower, upper, labels = self.evaluate(k)
