@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 
 import fcl
 import numpy as np
@@ -177,3 +178,30 @@ def test_no_free_slot_left_is_no_placement(make_scenario, make_cylinder, robot):
     result = MotionPlanner(scene, model=robot).check('T', relocated)
     assert not result.feasible and result.reason == Reason.NO_PLACEMENT
     assert f'room for {len(slots)}' in result.message
+
+
+def test_a_scene_of_500_objects_is_answered_within_the_time_limit(robot, make_scenario):
+    """#28 bad input: the largest scene SetScene accepts (500 objects) gets an answer, with its
+    reason, within the time limit; a feasible one passes the verifier."""
+
+    def pin_at(i: int) -> ObjectSpec:  # 16 mm pegs 25 mm apart, 24 per row
+        xy = (0.35 + 0.025 * (i % 24), -0.3 + 0.025 * (i // 24))
+        return ObjectSpec(f'O{i}', 'obstacle', 'cylinder', (*xy, 0.04), radius=0.008, height=0.08)
+
+    pins = [pin_at(i) for i in range(499)]
+    target = ObjectSpec('T', 'target', 'cylinder', (0.9, 0.35, 0.07), radius=0.03, height=0.14)
+    scene = make_scenario(*pins, target)
+    assert len(scene.objects) == 501  # the table is the 501st
+    planner = MotionPlanner(scene, PlannerConfig(time_limit_s=3.0), model=robot)
+    for object_id in ('O0', 'T', 'O250'):
+        start = time.perf_counter()
+        result = planner.check(object_id, [])
+        assert time.perf_counter() - start < 3.0 + 1.0  # the limit, and the blocker annotation
+        assert result.message and (result.feasible == (result.reason == Reason.SUCCESS))
+        if result.feasible:
+            report = planner.verifier.verify(
+                result.joint_trajectory,
+                planner.planning_scene(object_id, []),
+                Carried(scene.object(object_id), result.grasp_index, result.release_index),
+            )
+            assert report.ok, report.summary()
