@@ -114,10 +114,12 @@ class MotionPlanner:
         if answer is not None:
             return answer
         deadline = time.perf_counter() + self.config.time_limit_s  # the whole answer's budget
+        cpu_start = time.thread_time()
         result = self.plan(object_id, relocated)
         # Blockers cut short by the deadline stay in the cached answer (its feasibility is
         # final); the sweeps go on at the next uncached request about the same object.
         result = self.blockers.annotate(result, object_id, relocated, deadline)
+        result = dataclasses.replace(result, cpu_time=time.thread_time() - cpu_start)
         if result.reason != Reason.TIMEOUT:  # a timeout may pass on a quieter machine
             self.cache.put(object_id, relocated, result)
         return result
@@ -502,13 +504,13 @@ class MotionPlanner:
             True,
             Reason.SUCCESS,
             f'feasible (approach yaw {path.approach_yaw:.2f} rad)',
-            times,
-            trajectory,
-            ee_path,
-            grasp_index,
-            release_index,
-            _since(start),
-            timings,
+            times=times,
+            joint_trajectory=trajectory,
+            ee_path=ee_path,
+            grasp_index=grasp_index,
+            release_index=release_index,
+            planning_time=_since(start),
+            timings=timings,
             approach_yaw=path.approach_yaw,
         )
 

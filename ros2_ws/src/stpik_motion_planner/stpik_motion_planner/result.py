@@ -6,7 +6,7 @@ The :class:`Reason` values equal the constants of ``qtree_msgs/srv/RelocateObjec
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import KW_ONLY, dataclass, field
 from enum import IntEnum
 
 import numpy as np
@@ -55,6 +55,9 @@ class PlanResult:
         grasp_index: trajectory index where the object is attached (-1 if none).
         release_index: trajectory index where the object is released (-1 if none).
         planning_time: wall time of the check [s] (of the original run when from the cache).
+        cpu_time: CPU time of the planning thread during the check [s] (same run; 0 when not
+            planned, e.g. a bad request). Unlike the wall time, load on other cores leaves it
+            unchanged (benchmarks report both, #28).
         timings: wall time by stage: ``'sampling'``, ``'stpik'``, ``'collision'`` [s].
         from_cache: True when answered from the feasibility cache.
         approach_yaw: yaw of the approach axis used for the grasp [rad] (NaN if none).
@@ -68,12 +71,14 @@ class PlanResult:
     feasible: bool
     reason: Reason
     message: str
+    _: KW_ONLY  # everything after the answer itself by keyword (#27, #28)
     times: np.ndarray = field(default_factory=lambda: _empty(0))
     joint_trajectory: np.ndarray = field(default_factory=lambda: _empty(0, 7))
     ee_path: np.ndarray = field(default_factory=lambda: _empty(0, 7))
     grasp_index: int = -1
     release_index: int = -1
     planning_time: float = 0.0
+    cpu_time: float = 0.0
     timings: dict[str, float] = field(default_factory=dict)
     from_cache: bool = False
     approach_yaw: float = float('nan')

@@ -129,10 +129,13 @@ def check_summary(results: list[PlanResult]) -> dict:
     }
     for label, group in (('all', results), ('reached_stpik', reached), ('feasible', feasible)):
         times = [r.planning_time for r in group]
+        cpu = [r.cpu_time for r in group]
         out[label] = {
             'n': len(group),
             'median_ms': percentile_ms(times, 50),
             'p95_ms': percentile_ms(times, 95),
+            'cpu_median_ms': percentile_ms(cpu, 50),  # thread CPU time (load-independent)
+            'cpu_p95_ms': percentile_ms(cpu, 95),
             'mean_ms': round(float(np.mean(times)) * 1e3, 2) if times else None,
             'stage_median_ms': {
                 k: percentile_ms([r.timings.get(k, 0.0) for r in group], 50) for k in STAGES
