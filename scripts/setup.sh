@@ -53,7 +53,7 @@ else
     rm -rf "$VENV"
     "$PYTHON" -m venv "$VENV" || die "could not create the virtual environment"
   fi
-  say "installing pinned dependencies (ROS 2 Jazzy wheels, pin, fcl, ompl, mcap, rerun, ...)"
+  say "installing pinned dependencies (ROS 2 Jazzy wheels, pin, fcl, numba, mcap, rerun, ...)"
   "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --upgrade 'pip>=24' \
     || die "could not upgrade pip"
   "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check \
