@@ -413,9 +413,11 @@ class MotionPlanner:
             phase = 'above the drop zone'
             for option, (above, place_leg, retreat_leg) in enumerate(path.place_options):  # noqa: B007
                 try:
-                    seed = stpik.ready_posture(above.translation, lift[-1][0])
-                    q_above = stpik.converge(seed, above, scene, deadline=deadline)
+                    q_above = self._above_pose(lift[-1], above, scene, deadline)
                     _outside_limit_band(q_above, stpik, band, 'pose above the drop slot')
+                    # The same pose, its continuous joints the fewest turns from the lift's end:
+                    # the carry transit does not spin the wrist with the object in the hand.
+                    q_above = stpik.nearest_turn(q_above, lift[-1])
                     break
                 except PlanningTimeout:
                     raise
@@ -457,6 +459,21 @@ class MotionPlanner:
         grasp_index = sum(len(p) for p in parts[:3]) - 1
         release_index = sum(len(p) for p in parts) - 1
         return np.vstack([*parts, retreat]), grasp_index, release_index
+
+    def _above_pose(
+        self, q_lift: np.ndarray, above: pin.SE3, scene: SceneWorld, deadline: float
+    ) -> np.ndarray:
+        """IK of the pose above the drop slot, first from the lift's end ``q_lift`` [rad] (7,)
+        (its arm family: the carry transit then keeps the object upright, #29), else from the
+        ready posture turned toward the slot (before #29 the only seed)."""
+        stpik = self.stpik
+        try:
+            return stpik.converge(q_lift, above, scene, deadline=deadline)
+        except PlanningTimeout:
+            raise
+        except MotionPlannerError:
+            seed = stpik.ready_posture(above.translation, q_lift[0])
+            return stpik.converge(seed, above, scene, deadline=deadline)
 
     def _placed(self, obj: ObjectSpec, q_release: np.ndarray, in_hand: pin.SE3) -> ObjectSpec:
         """``obj`` where the hand at ``q_release`` [rad] leaves it: position and yaw of the

@@ -195,6 +195,15 @@ class Stpik:
         reference[0] = turned
         return reference
 
+    def nearest_turn(self, q: np.ndarray, near: np.ndarray) -> np.ndarray:
+        """``q`` [rad] (7,) with each continuous joint turned by whole turns (2π) to lie within
+        π of ``near`` [rad] (7,): the same arm pose, reached from ``near`` by the shortest
+        joint line (#29: a carry transit wound joint 7 by 4π and flipped the carried object)."""
+        q = np.array(q, dtype=float)
+        free = np.isinf(self.lower)
+        q[free] += 2 * math.pi * np.round((near[free] - q[free]) / (2 * math.pi))
+        return q
+
     def reset_timers(self) -> None:
         """Zero :attr:`collision_time`."""
         self.collision_time = 0.0
