@@ -103,9 +103,16 @@ def test_closed_loop_removes_a_joint_offset_open_loop_does_not(launch, ros_node,
     assert answer.feasible, answer.message
     closed_error = float(np.linalg.norm(_released_position(ros_node, seen) - planned))
     closed_hand = _hand_error(ros_node, states, result, motion)
+
     # The reply can arrive before the last /tracking message (a topic, not the reply): under
-    # load the final 'done' tick was still in flight (node tests, run 2 of this session).
-    assert ros_node.spin_until(lambda: any(t.phase == 'done' for t in seen['tracking']), 10.0)
+    # load the final 'done' tick was still in flight (node tests, run 2 of this session). Every
+    # segment ends with a 'done' tick, so wait for the LAST tick to be one (waiting for any
+    # 'done' returned at an earlier segment's: full suite of 2026-12-03, last tick 'tracking').
+    def last_is_done() -> bool:
+        ticks = [t for t in seen['tracking'] if t.phase != 'stopped']
+        return bool(ticks) and ticks[-1].phase == 'done'
+
+    assert ros_node.spin_until(last_is_done, 10.0)
     ticks = [t for t in seen['tracking'] if t.phase != 'stopped']
     assert len(ticks) > 100 and list(ticks[0].joint_names) == list(ARM_JOINTS)
     # #26: one streamed reference per tick; each was logged 'trajectory finished' at INFO
