@@ -220,6 +220,12 @@ def execute_with_replans(
             return Result.REPLAN_LIMIT, why, total, False
         ctx.replan_causes.append(error)
         goal_handle.publish_feedback(feedback_msg(None, ctx.replan_causes, ctx.reused_answers))
+        n = len(ctx.replan_causes)
+        publish = getattr(ctx.execution, 'publish_replan', None)  # /task_planner/replans
+        done_ids = list(ctx.execution.executed)
+        if publish is not None:
+            publish(replan=n, phase='started', cause=error, kept_ids=done_ids, reused_answers=-1,
+                    planner_runs=-1)  # fmt: skip
         # the scene once the undone relocation has put its object down (no object GRASPED)
         wait_for(lambda: not holds_object(ctx.scene()), ctx.param('scene_wait_s'))
         scene = ctx.scene()
@@ -235,6 +241,12 @@ def execute_with_replans(
         code, message, result = train(goal_handle, ctx, settings, movable, target, oracle)
         if reuse is not None:
             ctx.reused_answers.append(reuse.reused)
+        if publish is not None:
+            done = code == Result.SUCCESS
+            publish(replan=n, phase='planned' if done else 'failed', cause=error,
+                    kept_ids=list(prefix), sequence=list(result.sequence) if done else [],
+                    reused_answers=reuse.reused if reuse is not None else -1,
+                    planner_runs=result.planner_runs if result is not None else -1)  # fmt: skip
         if result is not None:
             results.append(result)
         if code == Result.NO_SOLUTION:

@@ -84,6 +84,7 @@ class Graph:
         self.runs: list[tuple[tuple[str, ...], tuple[str, ...]]] = []
         self.executed: list[str] = []
         self.feedback: list[Any] = []
+        self.replans: list[dict[str, Any]] = []  # the /task_planner/replans events
         self.handle = SimpleNamespace(
             request=None, is_cancel_requested=False, publish_feedback=self.feedback.append
         )
@@ -110,6 +111,9 @@ class Graph:
             execution=self,
             oracle=oracle,
         )
+
+    def publish_replan(self, **fields: Any) -> None:
+        self.replans.append(fields)
 
     def run(self, sequence, timeout_s, stop, prefix=(), changed=None):
         self.runs.append((tuple(sequence), tuple(prefix)))
@@ -167,6 +171,11 @@ def test_a_scene_change_keeps_the_relocations_done_and_plans_the_rest_after_them
     assert graph.runs[0][0] == ('O2', 'O1', 'T')
     assert graph.runs[1] == (('O5', 'T'), ('O2', 'O1'))  # kept, then the re-planned rest
     assert result.sequence == ('O2', 'O1', 'O5', 'T')
+    started, planned = graph.replans  # one re-plan: its start and its new plan, recorded
+    assert started['phase'] == 'started' and started['replan'] == 1
+    assert started['cause'].startswith('SCENE_CHANGED') and started['reused_answers'] == -1
+    assert planned['phase'] == 'planned' and planned['kept_ids'] == ['O2', 'O1']
+    assert planned['sequence'] == ['O5', 'T'] and planned['planner_runs'] >= 0
 
 
 def test_max_replans_ends_the_goal_with_replan_limit_naming_the_cause() -> None:
