@@ -275,6 +275,9 @@ def carry_over(old: Any, new: Any, memo: dict[int, Boxes] | None = None) -> str:
     """Put the answers of planner ``old`` still true in the scene of planner ``new`` into the
     cache of ``new`` (:class:`~.planner.MotionPlanner` s); the summary line (for the log).
 
+    The kinematics run on ``new``'s robot model (same arm): a check may still be running on
+    ``old``'s, and ``new`` serves no request before this returns.
+
     Args:
         memo: swept volumes by ``id(result)``, kept between calls (a kept answer is the same
             object in the next planner's cache); pruned to the kept answers.
@@ -285,8 +288,8 @@ def carry_over(old: Any, new: Any, memo: dict[int, Boxes] | None = None) -> str:
     memo = {} if memo is None else memo
 
     def swept_of(key: CacheKey, result: PlanResult) -> Boxes:
-        if id(result) not in memo:
-            memo[id(result)] = swept_volume(old.robot, old.verifier.reach, result, by_id[key[1]])
+        if id(result) not in memo:  # new's model: not yet serving, so no check is using it
+            memo[id(result)] = swept_volume(new.robot, new.verifier.reach, result, by_id[key[1]])
         return memo[id(result)]
 
     entries = dict(old.cache.items())
