@@ -145,7 +145,6 @@ class Stpik:
         self.model = robot.model
         self.data = self.model.createData()
         self.geometry_model = robot.geometry_model
-        self.geometry_data = pin.GeometryData(self.geometry_model)
         self._chain = _serial_chain(self.model, self.geometry_model)
         # Continuous joints (1, 3, 5, 7) have no limit: the model's ±2π is a modelling artefact.
         free = np.asarray(continuous_joints())
