@@ -109,6 +109,18 @@ def print_summary(run: McapRun) -> None:
     for topic in sorted(run.topics.values(), key=lambda t: t.name):
         print(f'  {topic.name:<{width}}  {topic.type:<{type_width}}  {topic.count:>7}')
     _print_training(run)
+    _print_world(run)
+
+
+def _print_world(run: McapRun) -> None:
+    """The changing world (#32): scene events, SCENE_CHANGED / GRASP_FAILED answers and
+    re-plans, with their times from the start of the log."""
+    from qtree_recorder.world_changes import TOPICS, timeline
+
+    lines = list(timeline(run.messages(TOPICS), run.start_ns))
+    print(f'changing world: {len(lines)} events' if lines else 'changing world: no events')
+    for line in lines:
+        print(line)
 
 
 def _print_training(run: McapRun) -> None:

@@ -175,3 +175,30 @@ def test_publish_replays_the_recorded_joint_states(log: Path, ros_node: Any) -> 
     assert len(received) == 20
     assert received[0].name[0] == 'j2s7s300_joint_1'
     assert received[-1].position[0] == pytest.approx(FX.HOME[0])
+
+
+def test_summary_and_rerun_show_a_replan_on_the_timeline(tmp_path: Path) -> None:
+    """#32 item 5: a recording with a scene event and a re-plan shows both, in time order."""
+    from jaco2_description.model import urdf_text
+
+    log = tmp_path / 'world.mcap'
+    FX.write_run(log, urdf_text=urdf_text(), world=True)
+    result = replay(str(log), '--summary')
+    assert result.returncode == 0, result.stderr
+    out = result.stdout.splitlines()
+    start = out.index('changing world: 4 events')
+    lines = out[start + 1 : start + 5]
+    assert "scene: 'O3' moved 0.100 m" in lines[0]  # O2 carried away is not a scene event
+    assert "motion planner: SCENE_CHANGED relocating 'T'" in lines[1]
+    assert "re-plan 1 started: SCENE_CHANGED relocating 'T'" in lines[2]
+    assert 'done so far: O2' in lines[2]
+    assert "re-plan 1 planned: kept ['O2'], then O3 -> T; 3 answers reused" in lines[3]
+    times = [float(line.split()[0].lstrip('+')) for line in lines]
+    assert times == sorted(times) and times[0] > 1.0
+    plain = tmp_path / 'plain.mcap'
+    FX.write_run(plain, urdf_text=urdf_text())
+    assert 'changing world: no events' in replay(str(plain), '--summary').stdout
+    rrd = tmp_path / 'world.rrd'
+    assert replay(str(log), '--rerun', '--rrd', str(rrd)).returncode == 0
+    texts = [str(t) for t in FX.rrd_column(rrd, '/events/world', 'TextLog:text')]
+    assert len(texts) == 4 and 're-plan 1 planned' in texts[-1], texts

@@ -3,8 +3,11 @@
 The arm comes from its URDF through Rerun's own loader and moves by one ``Transform3D`` per joint
 (parent/child link frames, ``rr.urdf.UrdfJoint.compute_transform``). Scene objects, planned
 end-effector paths, the Q-tree graph, episode curves and planning events go to the entities of
-:mod:`qtree_recorder.rerun_blueprint`. Every ``on_*`` method swallows Rerun errors (logged once
-per method): the caller, e.g. the recorder node, must keep recording whatever Rerun does.
+:mod:`qtree_recorder.rerun_blueprint`; the changing world (#32: scene events, SCENE_CHANGED /
+GRASP_FAILED answers, re-plans from ``/task_planner/replans``, :mod:`.world_changes`) goes to
+``/events/world`` as text on the same timeline. Every ``on_*`` method swallows Rerun errors
+(logged once per method): the caller, e.g. the recorder node, must keep recording whatever
+Rerun does.
 
 Scene objects are dicts with the keys (lengths [m], angles via unit quaternions)::
 
@@ -37,6 +40,7 @@ from qtree_recorder.qtree_figure import (
     KIND_TARGET,
     layout_tree,
 )
+from qtree_recorder.world_changes import REPLAN_TOPIC, WorldChanges
 
 _LOG = logging.getLogger(__name__)
 EVENTS_STOP = f'{bp.EVENTS_ENTITY}/execution'  # closed-loop stops in the event log
@@ -66,7 +70,8 @@ REASONS = {
     304: 'SCENE_CHANGED', 305: 'GRASP_FAILED',
 }  # fmt: skip
 TOPICS = ('/robot_description', '/joint_states', '/scene', '/motion_planner/events', '/qtree',
-          '/training_stats', '/motion_planner/tracking')  # fmt: skip
+          '/training_stats', '/motion_planner/tracking', REPLAN_TOPIC)  # fmt: skip
+WORLD_ENTITY = f'{bp.EVENTS_ENTITY}/world'  # scene events and re-plans (#32) on the timeline
 TRACK_COLORS = {'reference': (120, 120, 130), 'actual': (40, 180, 70)}
 TRACK_EVERY = 50  # log the reference / actual EE paths in pieces of this many ticks [-]
 
@@ -128,6 +133,7 @@ class RunView:
         self._objects: set[str] = set()
         self._tmpdir: tempfile.TemporaryDirectory[str] | None = None
         self._track: dict[str, list] = {'id': [''], 'reference': [], 'actual': [], 'chunk': [0]}
+        self._world = WorldChanges()  # scene events and re-plans (#32)
         self.rec = rr.RecordingStream(application_id, recording_id=recording_id)
         self.rec.set_log_time_enabled(False)  # wall time of logging: meaningless in a replay
         blueprint = bp.default_blueprint()
@@ -434,7 +440,10 @@ class RunView:
         Returns:
             True when the topic is one the view shows.
         """
-        if topic == '/joint_states':
+        self._log_world(topic, msg, t_ns)
+        if topic == REPLAN_TOPIC:
+            pass  # shown by _log_world only
+        elif topic == '/joint_states':
             self.on_joint_state(list(msg.name), [float(v) for v in msg.position], t_ns)
         elif topic == '/scene':
             zone = msg.drop_zone.position, msg.drop_zone_size
@@ -479,6 +488,15 @@ class RunView:
         else:
             return False
         return True
+
+    def _log_world(self, topic: str, msg: Any, t_ns: int) -> None:
+        """Scene events and re-plans (:mod:`.world_changes`) as warnings on ``/events/world``."""
+        lines = self._world.on_message(topic, msg)
+        if lines:
+            self._set_time(t_ns)
+        for line in lines:
+            level = rr.TextLogLevel.INFO if ' planned:' in line else rr.TextLogLevel.WARN
+            self.rec.log(WORLD_ENTITY, rr.TextLog(line, level=level))
 
     def flush(self) -> None:
         """Flush pending data to the sink (never raises)."""

@@ -60,15 +60,18 @@ def _object(oid: str, role: int, pos: tuple[float, float, float], status: int) -
     }
 
 
-def scene_message(t_ns: int, relocated: tuple[str, ...] = ()) -> dict[str, Any]:
-    """A Scene: table, target T, obstacles O1..O3 (the relocated ones in the drop zone)."""
+def scene_message(
+    t_ns: int, relocated: tuple[str, ...] = (), moved: dict[str, tuple] | None = None
+) -> dict[str, Any]:
+    """A Scene: table, target T, obstacles O1..O3 (the relocated ones in the drop zone;
+    ``moved``: ids in the clutter at another position [m])."""
     objects = [_object('table', 2, (0.5, 0.1, -0.02), 0), _object('T', 0, (0.6, 0.0, 0.075), 0)]
     for index, oid in enumerate(OBSTACLES):
         y = -0.12 + 0.12 * index
         if oid in relocated:
             objects.append(_object(oid, 1, (0.3 + 0.07 * index, 0.45, 0.075), 2))
         else:
-            objects.append(_object(oid, 1, (0.48, y, 0.075), 0))
+            objects.append(_object(oid, 1, (moved or {}).get(oid, (0.48, y, 0.075)), 0))
     return {
         'header': {'stamp': _stamp(t_ns), 'frame_id': 'j2s7s300_link_base'},
         'scenario_name': 'fixture',
@@ -138,6 +141,40 @@ class FixtureCounts:
     training_stats: int
 
 
+def _write_world(put: Any, t_ns: int, latched: Any, default: Any) -> None:
+    """O3 moves 0.1 m in the clutter while T is carried, the planner answers SCENE_CHANGED and
+    the task planner re-plans (#32)."""
+    moved = {'O3': (0.48, 0.22, 0.075)}
+    put('/scene', 'qtree_msgs/msg/Scene', scene_message(t_ns + 10, ('O2',), moved), t_ns + 10,
+        latched)  # fmt: skip
+    event = _event(t_ns + 20, 'T', ['O2'], False) | {
+        'execute': True,
+        'reason': 304,
+        'message': "'O3' moved 0.100 m; undone",
+    }
+    put('/motion_planner/events', 'qtree_msgs/msg/PlanningEvent', event, t_ns + 20, default)
+    base = {'cause': "SCENE_CHANGED relocating 'T': 'O3' moved 0.100 m", 'kept_ids': ['O2']}
+    started = base | {
+        'stamp': _stamp(t_ns + 30),
+        'replan': 1,
+        'phase': 'started',
+        'sequence': [],
+        'reused_answers': -1,
+        'planner_runs': -1,
+    }
+    planned = base | {
+        'stamp': _stamp(t_ns + 40),
+        'replan': 1,
+        'phase': 'planned',
+        'sequence': ['O3', 'T'],
+        'reused_answers': 3,
+        'planner_runs': 2,
+    }
+    for k, msg in enumerate((started, planned)):
+        put('/task_planner/replans', 'qtree_msgs/msg/ReplanEvent', msg, t_ns + 30 + 10 * k,
+            default)  # fmt: skip
+
+
 def write_run(
     path: Path,
     *,
@@ -147,6 +184,7 @@ def write_run(
     urdf_text: str | None = None,
     chunk_size: int = 256 * 1024,
     close: bool = True,
+    world: bool = False,
 ) -> FixtureCounts:
     """Write a small run log.
 
@@ -158,6 +196,9 @@ def write_run(
         urdf_text: URDF for /robot_description (not written when None).
         chunk_size: MCAP chunk size [bytes]; small values give many chunks.
         close: False leaves the file without summary and footer (like a killed recorder).
+        world: also a changing world (#32) after the relocation of O2: O3 moved in the clutter
+            (a /scene), the SCENE_CHANGED answer relocating T and the re-plan's two
+            /task_planner/replans events.
     """
     encoder = DynamicEncoder()
     log = McapLog(path, chunk_size=chunk_size, flush_interval_s=1e9)
@@ -195,6 +236,8 @@ def write_run(
             events += 1
     t_end = T0_NS + (joint_states + 1) * JOINT_PERIOD_NS
     put('/scene', 'qtree_msgs/msg/Scene', scene_message(t_end, ('O2',)), t_end, latched)
+    if world:
+        _write_world(put, t_end, latched, default)
     if close:
         log.close()
     else:  # like a killed recorder: chunks on disk, no summary, no footer

@@ -18,8 +18,9 @@ GRASP_FAILED (undone by the motion planner), a step no longer feasible, or a sce
 two steps does not end the goal: the relocations done are kept, the rest is learned again from
 the current /scene with the goal's planner and executed, at most ``max_replans`` times (then
 REPLAN_LIMIT); no sequence from the new state -> NO_SOLUTION saying what changed; a target no
-longer in the clutter -> NO_SOLUTION. Feedback and result carry ``replans`` and
-``replan_causes``.
+longer in the clutter -> NO_SOLUTION. Feedback and result carry ``replans``,
+``replan_causes`` and ``reused_answers`` (per re-plan: questions answered from the answers the
+motion planner kept across the change, :class:`~.replanning.ReuseCounter`).
 """
 
 from __future__ import annotations
@@ -93,6 +94,8 @@ class GoalContext:
         execution: runs the learned sequence (stops the arm on cancel).
         oracle: the running goal's planner oracle (its ``retries``), None before training.
         replan_causes: the running goal's re-plans, the cause of each (#32).
+        reused_answers: per re-plan whose training ended, its questions answered from the
+            answers the motion planner kept across the change (#32 item 4).
     """
 
     scene: Callable[[], Any]
@@ -104,6 +107,7 @@ class GoalContext:
     execution: SequenceExecution
     oracle: RosPlannerOracle | None = None
     replan_causes: list[str] = field(default_factory=list)
+    reused_answers: list[int] = field(default_factory=list)
 
 
 def run_goal(goal_handle: Any, ctx: GoalContext) -> tuple[int, str, Any, bool]:
@@ -158,7 +162,8 @@ def train(
     def on_episode(stats) -> bool:
         ctx.publish_stats(stats, trainer.policy.name)
         if stats.episode % every == 0:
-            goal_handle.publish_feedback(feedback_msg(stats, ctx.replan_causes))
+            feedback = feedback_msg(stats, ctx.replan_causes, ctx.reused_answers)
+            goal_handle.publish_feedback(feedback)
             ctx.publish_tree(trainer.tree, stats.episode)
         return not (goal_handle.is_cancel_requested or ctx.stopping.is_set())
 
@@ -214,7 +219,13 @@ def execute_with_replans(
             why = f'max_replans={settings.max_replans} re-plans made, one more needed: {error}'
             return Result.REPLAN_LIMIT, why, total, False
         ctx.replan_causes.append(error)
-        goal_handle.publish_feedback(feedback_msg(None, ctx.replan_causes))
+        goal_handle.publish_feedback(feedback_msg(None, ctx.replan_causes, ctx.reused_answers))
+        n = len(ctx.replan_causes)
+        publish = getattr(ctx.execution, 'publish_replan', None)  # /task_planner/replans
+        done_ids = list(ctx.execution.executed)
+        if publish is not None:
+            publish(replan=n, phase='started', cause=error, kept_ids=done_ids, reused_answers=-1,
+                    planner_runs=-1)  # fmt: skip
         # the scene once the undone relocation has put its object down (no object GRASPED)
         wait_for(lambda: not holds_object(ctx.scene()), ctx.param('scene_wait_s'))
         scene = ctx.scene()
@@ -224,7 +235,18 @@ def execute_with_replans(
         except InvalidScenarioError as err:
             return Result.NO_SOLUTION, f'after {error}: {err}', total, False
         oracle = PrefixOracle(ctx.oracle, prefix)
+        reuse = getattr(ctx.oracle, 'reuse', None)  # a ReuseCounter (RosPlannerOracle)
+        if reuse is not None:
+            reuse.reset()  # count this training's answers kept across the change
         code, message, result = train(goal_handle, ctx, settings, movable, target, oracle)
+        if reuse is not None:
+            ctx.reused_answers.append(reuse.reused)
+        if publish is not None:
+            done = code == Result.SUCCESS
+            publish(replan=n, phase='planned' if done else 'failed', cause=error,
+                    kept_ids=list(prefix), sequence=list(result.sequence) if done else [],
+                    reused_answers=reuse.reused if reuse is not None else -1,
+                    planner_runs=result.planner_runs if result is not None else -1)  # fmt: skip
         if result is not None:
             results.append(result)
         if code == Result.NO_SOLUTION:

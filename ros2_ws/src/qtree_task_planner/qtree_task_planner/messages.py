@@ -63,10 +63,15 @@ def stats_msg(stats: EpisodeStats, policy: str, stamp: Any) -> TrainingStats:
 
 
 def feedback_msg(
-    stats: EpisodeStats | None, replan_causes: Sequence[str] = ()
+    stats: EpisodeStats | None, replan_causes: Sequence[str] = (), reused: Sequence[int] = ()
 ) -> RetrieveTarget.Feedback:
-    """Action feedback from one episode's statistics (None: only the re-plans, #32)."""
-    msg = RetrieveTarget.Feedback(replans=len(replan_causes), replan_causes=list(replan_causes))
+    """Action feedback from one episode's statistics (None: only the re-plans, #32), with the
+    answers reused by each re-plan whose training ended (``reused``)."""
+    msg = RetrieveTarget.Feedback(
+        replans=len(replan_causes),
+        replan_causes=list(replan_causes),
+        reused_answers=[int(n) for n in reused],
+    )
     if stats is not None:
         msg.episode, msg.nodes, msg.edges = stats.episode, stats.nodes, stats.edges
         msg.mp_calls, msg.best_sequence = stats.mp_calls, list(stats.best_sequence)

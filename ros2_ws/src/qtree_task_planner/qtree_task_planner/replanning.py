@@ -14,6 +14,11 @@ two relocations. Then (:func:`~.goal_run.run_goal`):
 * the remaining retrieval is learned again from the current /scene with the goal's own planner
   (policy, budget and seed), and its sequence is executed after the prefix.
 
+What is still true is kept too (item 4): the motion planner carries over to the new scene every
+cached answer the change provably leaves true (``stpik_motion_planner.answer_reuse``), so the
+re-plan's questions about them are answered from its cache; :class:`ReuseCounter` counts them
+(``reused_answers``, one per re-plan).
+
 At most the goal's ``max_replans`` re-plans; the next cause then ends the goal with
 ``REPLAN_LIMIT`` naming it.
 """
@@ -55,6 +60,36 @@ def kept_prefix(executed: Iterable[str], relocated_now: Iterable[str]) -> tuple[
     """The relocations that stay done: the executed ids the scene shows RELOCATED, in order."""
     relocated = set(relocated_now)
     return tuple(object_id for object_id in executed if object_id in relocated)
+
+
+class ReuseCounter:
+    """Counts the distinct questions of one training answered from the motion planner's cache.
+
+    In a re-plan's training, the first time a ``(set, object)`` question is asked an answer from
+    the cache can only be one the planner kept across the scene change (its cache was rebuilt
+    with only those; repeats of a question asked in this training are not counted).
+
+    Attributes:
+        reused: distinct questions answered from the cache since :meth:`reset` [-].
+    """
+
+    def __init__(self) -> None:
+        self._seen: set[tuple[frozenset[str], str]] = set()
+        self.reused = 0
+
+    def reset(self) -> None:
+        """Start counting for a new training."""
+        self._seen.clear()
+        self.reused = 0
+
+    def count(self, relocated: Iterable[str], object_id: str, from_cache: bool) -> None:
+        """Note one answer to "``object_id`` after ``relocated``" (``from_cache``: the
+        response's flag)."""
+        key = (frozenset(relocated), object_id)
+        if key in self._seen:
+            return
+        self._seen.add(key)
+        self.reused += bool(from_cache)
 
 
 class PrefixOracle:

@@ -22,6 +22,7 @@ from qtree_task_planner.oracle import (
     approach_blockers_of,
     blockers_of,
 )
+from qtree_task_planner.replanning import ReuseCounter
 from qtree_task_planner.retry import Backoff
 
 COPY_AFTER = 0.8  # share of the answer time-out after which a question is sent again [-]
@@ -60,6 +61,7 @@ class RosPlannerOracle:
     Attributes:
         planner_runs: answers not served from the motion planner's cache (``from_cache``).
         retries: questions asked again (busy, time-out or lost reply), over the oracle's life.
+        reuse: distinct questions answered from the planner's cache since its last reset (#32).
     """
 
     RETRIED = frozenset({RelocateObject.Response.TIMEOUT, RelocateObject.Response.PLANNER_BUSY})
@@ -92,6 +94,7 @@ class RosPlannerOracle:
         self.backoff = backoff or Backoff()
         self.planner_runs = 0
         self.retries = 0
+        self.reuse = ReuseCounter()
         self._approaches: dict[SetKey, tuple[frozenset[str], ...] | None] = {}
 
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
@@ -150,6 +153,7 @@ class RosPlannerOracle:
             detail = f'request rejected (reason {response.reason}): {response.message}'
             raise OracleUnavailableError(object_id, relocated, detail)
         self.planner_runs += not response.from_cache
+        self.reuse.count(relocated, object_id, response.from_cache)
         if response.feasible:
             return FeasibilityAnswer(True, ())
         if response.reason >= 300:  # a time-out says nothing about who blocks

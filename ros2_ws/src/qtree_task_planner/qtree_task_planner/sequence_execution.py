@@ -10,7 +10,9 @@ most ``CANCEL_CONFIRM_S``. What was executed before is kept in :attr:`executed`.
 A world changing under the execution (#32) ends a run with ``'replan'`` and the cause
 (:func:`~.replanning.replan_cause`): a ``SCENE_CHANGED`` or ``GRASP_FAILED`` answer (the motion
 planner undid that relocation), a step answered infeasible, or the ``changed`` check before a
-step naming what moved since the sequence was learned. The goal then re-plans the rest.
+step naming what moved since the sequence was learned. The goal then re-plans the rest and
+publishes each re-plan on ``/task_planner/replans`` (:meth:`SequenceExecution.publish_replan`,
+``qtree_msgs/ReplanEvent``) for the recording and the Rerun view.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from jaco2_description.model import ARM_JOINTS
+from qtree_msgs.msg import ReplanEvent
 from qtree_msgs.srv import RelocateObject
 from qtree_node_support.qos import SERVICE_QOS
 from qtree_node_support.text import quote
@@ -64,6 +67,8 @@ class SequenceExecution:
         self._client = client
         self._canceled = threading.Event()
         self._stop_pub = node.create_publisher(JointTrajectory, '/joint_trajectory', 10)
+        self._replan_pub = node.create_publisher(ReplanEvent, '/task_planner/replans', 10)
+        self._clock = node.get_clock()
         self._cancel_client = node.create_client(
             Trigger,
             '/motion_planner/cancel_execution',
@@ -71,6 +76,10 @@ class SequenceExecution:
             callback_group=ReentrantCallbackGroup(),
         )
         self.executed: list[str] = []
+
+    def publish_replan(self, **fields) -> None:
+        """Publish one :class:`ReplanEvent` on /task_planner/replans (#32), stamped now."""
+        self._replan_pub.publish(ReplanEvent(stamp=self._clock.now().to_msg(), **fields))
 
     def reset(self) -> None:
         """Forget a cancel of a previous goal (call at goal start)."""

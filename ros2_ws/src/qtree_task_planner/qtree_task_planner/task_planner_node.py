@@ -103,7 +103,7 @@ class TaskPlannerNode(Node):
             goal_handle.abort()
             return result_msg(None, error_code=Result.INVALID_GOAL, message='busy with a goal')
         self._active, self._goal_context.oracle = goal_handle, None
-        self._goal_context.replan_causes = []
+        self._goal_context.replan_causes, self._goal_context.reused_answers = [], []
         self._execution.reset()
         try:
             code, message, result, executed = run_goal(goal_handle, self._goal_context)
@@ -124,6 +124,7 @@ class TaskPlannerNode(Node):
         msg.planner_retries = oracle.retries if oracle else 0
         msg.replan_causes = list(self._goal_context.replan_causes)
         msg.replans = len(msg.replan_causes)
+        msg.reused_answers = list(self._goal_context.reused_answers)
         ended = end_goal(goal_handle, code, self.stopping)
         if ended:
             self.get_logger().info(ended)

@@ -17,6 +17,7 @@ from qtree_task_planner.goal_run import GoalContext, execute_with_replans, scene
 from qtree_task_planner.oracle import TableOracle
 from qtree_task_planner.replanning import (
     PrefixOracle,
+    ReuseCounter,
     combined,
     kept_prefix,
     replan_cause,
@@ -83,6 +84,7 @@ class Graph:
         self.runs: list[tuple[tuple[str, ...], tuple[str, ...]]] = []
         self.executed: list[str] = []
         self.feedback: list[Any] = []
+        self.replans: list[dict[str, Any]] = []  # the /task_planner/replans events
         self.handle = SimpleNamespace(
             request=None, is_cancel_requested=False, publish_feedback=self.feedback.append
         )
@@ -109,6 +111,9 @@ class Graph:
             execution=self,
             oracle=oracle,
         )
+
+    def publish_replan(self, **fields: Any) -> None:
+        self.replans.append(fields)
 
     def run(self, sequence, timeout_s, stop, prefix=(), changed=None):
         self.runs.append((tuple(sequence), tuple(prefix)))
@@ -166,6 +171,11 @@ def test_a_scene_change_keeps_the_relocations_done_and_plans_the_rest_after_them
     assert graph.runs[0][0] == ('O2', 'O1', 'T')
     assert graph.runs[1] == (('O5', 'T'), ('O2', 'O1'))  # kept, then the re-planned rest
     assert result.sequence == ('O2', 'O1', 'O5', 'T')
+    started, planned = graph.replans  # one re-plan: its start and its new plan, recorded
+    assert started['phase'] == 'started' and started['replan'] == 1
+    assert started['cause'].startswith('SCENE_CHANGED') and started['reused_answers'] == -1
+    assert planned['phase'] == 'planned' and planned['kept_ids'] == ['O2', 'O1']
+    assert planned['sequence'] == ['O5', 'T'] and planned['planner_runs'] >= 0
 
 
 def test_max_replans_ends_the_goal_with_replan_limit_naming_the_cause() -> None:
@@ -233,3 +243,46 @@ def test_the_watch_names_what_moved_between_steps_but_not_what_was_carried() -> 
 
 def _dist(a, b) -> float:
     return ((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5
+
+
+def test_reuse_counter_counts_distinct_questions_answered_from_the_cache() -> None:
+    counter = ReuseCounter()
+    counter.count(('O1',), 'T', True)
+    counter.count(('O1',), 'T', True)  # the same question again: not a second reuse
+    counter.count(('O2', 'O1'), 'O3', False)
+    counter.count(('O1', 'O2'), 'O3', True)  # same set: asked before, planned then
+    counter.count((), 'O1', True)
+    assert counter.reused == 2
+    counter.reset()
+    counter.count(('O1',), 'T', True)
+    assert counter.reused == 1
+
+
+class CachingOracle(TableOracle):
+    """A table oracle whose answers count as from the motion planner's cache when in
+    ``cached`` (the answers it kept across a scene change)."""
+
+    def __init__(self, requirements, cached) -> None:
+        super().__init__(requirements)
+        self.reuse, self.cached = ReuseCounter(), cached
+
+    def answer(self, relocated, object_id):
+        self.reuse.count(relocated, object_id, (frozenset(relocated), object_id) in self.cached)
+        return super().answer(relocated, object_id)
+
+
+def test_each_replan_reports_the_answers_it_reused() -> None:
+    kept = {(frozenset({'O1'}), 'T'), (frozenset(), 'O1')}
+    oracle = CachingOracle({'T': [{'O1'}]}, kept)
+
+    def grasp_fails(graph, sequence, prefix):
+        return REPLAN, f'GRASP_FAILED relocating {sequence[0]!r}: grasp failed (attempt 1)'
+
+    graph = Graph(oracle, [grasp_fails, grasp_fails, all_done])
+    code, message, _, _ = graph.go()
+    assert code == Result.SUCCESS, message
+    assert len(graph.ctx.reused_answers) == 2  # one per re-plan, both asked the kept pairs
+    assert all(n >= 1 for n in graph.ctx.reused_answers)
+    assert graph.ctx.reused_answers[0] <= len(kept)
+    # the feedback of the second re-plan's training carries the first re-plan's count
+    assert list(graph.feedback[-1].reused_answers) == graph.ctx.reused_answers[:1]

@@ -39,6 +39,7 @@ from typing import Any
 from qtree_scene.message import scenario_from_msg
 from qtree_scene.scene import ObjectSpec
 
+from stpik_motion_planner.answer_reuse import carry_over
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import InvalidRequest, MotionPlannerError
 from stpik_motion_planner.planner import MotionPlanner
@@ -99,6 +100,7 @@ class PlannerService:
                 return
             planner = MotionPlanner(scenario, self._config())
             self._scene_error = ''
+            reuse = self._carry_over(planner)
         except (MotionPlannerError, ValueError) as err:  # ScenarioError is a ValueError
             planner, self._scene_error, geometry = None, str(err), None
             self._log('warning', f'scene rejected: {err}')
@@ -107,7 +109,18 @@ class PlannerService:
             self._scene_swapped.notify_all()
         self._original = {o.id: o for o in scenario.objects} if planner else {}
         if planner is not None:
-            self._log('info', f'scene {msg.scenario_name!r}: planner rebuilt')
+            self._log('info', f'scene {msg.scenario_name!r}: planner rebuilt, {reuse}')
+
+    def _carry_over(self, planner: MotionPlanner) -> str:
+        """Keep in ``planner``'s cache the answers of the previous planner a scene change leaves
+        true (#32, :mod:`.answer_reuse`); the summary line. Never raises: a failure keeps none."""
+        old = self._planner
+        if old is None:
+            return 'no cached answers'
+        try:  # a check still running on the old planner answers for the old scene: not kept
+            return carry_over(old, planner)
+        except Exception as err:  # reuse is an optimisation, never a failure
+            return f'kept 0 cached answers ({type(err).__name__}: {err})'
 
     def answer(
         self,

@@ -31,7 +31,7 @@ def test_scene_contract_frame_and_relocated_objects() -> None:
     assert logs[-1][0] == 'warning'
     scenario = load_scenario('s1')
     service.on_scene(scene_msg(scenario))
-    assert logs[-1] == ('info', "scene 's1': planner rebuilt")
+    assert logs[-1] == ('info', "scene 's1': planner rebuilt, no cached answers")
     first = _answer(service, 'O2')
     assert first.feasible and not first.from_cache
     # O2 carried to the drop zone (GRASPED, then RELOCATED): the same scene, the cache kept.
@@ -40,9 +40,16 @@ def test_scene_contract_frame_and_relocated_objects() -> None:
         service.on_scene(moved)
     assert len(logs) == 2
     assert _answer(service, 'O2').from_cache
-    # Moving an object that is still IN_CLUTTER is a new scene.
+    # Moving an object that is still IN_CLUTTER is a new scene; O2's answer is kept only if O5's
+    # old and new footprints are clear of its motion (#32 item 4), as the log line says.
     service.on_scene(scene_msg(scenario, {'O5': ((0.9, -0.2, 0.06), (0, 0, 0, 1))}))
-    assert len(logs) == 3 and not _answer(service, 'O2').from_cache
+    assert len(logs) == 3 and 'changed: O5' in logs[-1][1]
+    kept = 'kept 1 of 1' in logs[-1][1]
+    assert kept or 'kept 0 of 1' in logs[-1][1]
+    assert _answer(service, 'O2').from_cache == kept
+    # Moving O2 itself drops its answer.
+    service.on_scene(scene_msg(scenario, {'O2': ((0.9, 0.2, 0.06), (0, 0, 0, 1))}))
+    assert 'changed: O2' in logs[-1][1] and not _answer(service, 'O2').from_cache
 
 
 def test_scene_during_execution_is_applied_after_it() -> None:
@@ -58,7 +65,7 @@ def test_scene_during_execution_is_applied_after_it() -> None:
         return result
 
     assert service.execute(plan, follow).feasible
-    assert logs[-1] == ('info', "scene 's2': planner rebuilt")
+    assert logs[-1][1].startswith("scene 's2': planner rebuilt, kept 0 of 1")
 
 
 def test_a_request_waits_for_the_first_scene_and_for_the_scene_it_names() -> None:
