@@ -97,14 +97,33 @@ def ros_domain(monkeypatch: pytest.MonkeyPatch) -> int:
     return domain_id
 
 
+FAILED_LOG_CHARS = 12000  # tail of each node's log attached to a failed test's report [chars]
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo) -> Any:
+    """A failed test's report gets the tail of each node's log (:func:`launch`): pytest's basetemp
+    keeps only the last three runs, so the logs of a rare failure were gone when looked for."""
+    report = yield
+    if report.when == 'call' and report.failed:
+        for node in getattr(item, 'qtree_nodes', ()):
+            text = node.log_text()[-FAILED_LOG_CHARS:]
+            report.sections.append((f'log of {node.name} ({node.log_path})', text))
+    return report
+
+
 @pytest.fixture
-def launch(ros_domain: int, tmp_path: Path) -> Iterator[Callable[..., NodeProcess]]:
+def launch(
+    ros_domain: int, tmp_path: Path, request: pytest.FixtureRequest
+) -> Iterator[Callable[..., NodeProcess]]:
     """Start nodes as processes (``launch(pkg, exe, parameters={...})``); all stopped at teardown.
 
     Teardown asserts every node still alive exits cleanly on SIGINT (exit code 0), like a
-    launch_testing post-shutdown check; nodes a test killed on purpose are skipped.
+    launch_testing post-shutdown check; nodes a test killed on purpose are skipped. When the test
+    failed, the nodes' logs are added to its report.
     """
     nodes: list[NodeProcess] = []
+    request.node.qtree_nodes = nodes  # read by pytest_runtest_makereport on a failure
 
     def _launch(package: str, executable: str, **kwargs: Any) -> NodeProcess:
         kwargs.setdefault('log_dir', tmp_path / 'logs')
