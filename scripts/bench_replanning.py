@@ -23,6 +23,7 @@ import platform
 import re
 import subprocess
 import time
+from collections import Counter
 from pathlib import Path
 from statistics import median
 
@@ -165,6 +166,7 @@ def targets_met(outcomes: list, rows: list[dict]) -> dict:
         'reused_met': reused is not None and reused >= TARGETS['reused_share_one_object_min'],
         'unsolvable_after_event': sum(o.solvable is False for o in outcomes),
         'undecided_after_event': sum(o.solvable is None for o in outcomes),
+        'solvable_decided_by': dict(Counter(o.decided_by for o in outcomes)),
     }
 
 

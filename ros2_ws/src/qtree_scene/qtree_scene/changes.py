@@ -73,6 +73,25 @@ def scene_changes(
     return changes
 
 
+def changes_under_relocation(
+    before: Mapping[str, ObjectSpec], after: Mapping[str, ObjectSpec], object_id: str
+) -> list[str]:
+    """:func:`scene_changes` while ``object_id`` is being relocated: the object itself is
+    watched too while it stands in the clutter (the hand is on its way to a grasp planned for
+    where it was), and left out once it has left the clutter (grasped and carried, or gone: the
+    grasp then says so).
+
+    Args:
+        before: the clutter at the start of the relocation (:func:`clutter_objects`, nothing
+            ignored).
+        after: the clutter now.
+        object_id: the object being relocated.
+    """
+    if object_id not in after:
+        before = {i: o for i, o in before.items() if i != object_id}
+    return scene_changes(before, after)
+
+
 def changed_ids(changes: list[str]) -> list[str]:
     """The object ids named by :func:`scene_changes` lines, in order."""
     return [line.split("'")[1] for line in changes if line.startswith("'")]

@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 
-from qtree_scene.changes import changed_ids, clutter_objects, scene_changes
+from qtree_scene.changes import (
+    changed_ids,
+    changes_under_relocation,
+    clutter_objects,
+    scene_changes,
+)
 from qtree_scene.conversions import scene_msg
 from qtree_scene.scenario import load_scenario
 
@@ -47,3 +52,16 @@ def test_clutter_objects_leave_out_relocated_grasped_and_ignored_ones() -> None:
     msg = scene_msg(scenario, statuses={'O1': 'relocated', 'O2': 'grasped'})
     ids = set(clutter_objects(msg, ignore={'O3'}))
     assert ids == {o.id for o in scenario.objects} - {'O1', 'O2', 'O3'}
+
+
+def test_the_object_being_relocated_is_watched_until_it_leaves_the_clutter() -> None:
+    """A target moved under its own approach is a change (it was ignored before: the hand went
+    on to a grasp where the target no longer was); once grasped (not in the clutter) it is not."""
+    before, after = objects(), objects()
+    t = after['T']
+    after['T'] = dataclasses.replace(t, position=(0.8, -0.1, t.position[2]))
+    assert changes_under_relocation(before, after, 'T') == ["'T' moved 0.100 m"]
+    del after['T']  # grasped: carried from here on
+    assert changes_under_relocation(before, after, 'T') == []
+    del after['O4']  # any other object still counts
+    assert changes_under_relocation(before, after, 'T') == ["'O4' removed"]

@@ -64,6 +64,7 @@ def test_an_event_with_nothing_to_move_is_skipped() -> None:
 def _outcome(**changes) -> RunOutcome:
     base = dict(
         scenario='s', event='grasp_failure', seed=0, step=0, changed='', solvable=True,
+        decided_by='',
         retrieved=True, replans=1, extra_planner_runs=2, cached=10, reused=5, recovery_s=1.0,
         violations=0, sequence=(),
     )  # fmt: skip

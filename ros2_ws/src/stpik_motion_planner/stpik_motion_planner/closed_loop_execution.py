@@ -17,8 +17,10 @@ joints, no joint state for ``joint_state_timeout_s``) the arm is commanded to ho
 measured position and the relocation is answered ``EXECUTION_FAILED`` with the reason.
 
 Execution in a changing world (#32): until the object is released, every new /scene is compared
-with the scene at the start of the execution (:func:`qtree_scene.changes.scene_changes`, the
-objects in the clutter but the carried one); on a change the arm stops at once, before the
+with the scene at the start of the execution
+(:func:`qtree_scene.changes.changes_under_relocation`: the objects in the clutter, the one being
+relocated too until it leaves the clutter, so a target moved under its own approach is seen);
+on a change the arm stops at once, before the
 controller's clearance check of that tick (so a newcomer is seen as a change, not a near miss),
 the relocation is undone (:mod:`.undo`: back along the executed path, a carried object put back
 down) and answered ``SCENE_CHANGED`` naming the objects; a grasp refused by the attach service is
@@ -36,7 +38,7 @@ import numpy as np
 import pinocchio as pin
 from jaco2_description.model import ARM_JOINTS, Jaco2Model
 from qtree_msgs.msg import ObjectState, Scene, TrackingState
-from qtree_scene.changes import clutter_objects, scene_changes
+from qtree_scene.changes import changes_under_relocation, clutter_objects
 from qtree_scene.message import scenario_from_msg
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
@@ -172,7 +174,7 @@ class Execution(TrajectoryExecution):
             self._object_id, self._stopped = object_id, ''
             self._stop_reason = Reason.EXECUTION_FAILED
             msg = self._scene_msg
-            self._watched = None if msg is None else clutter_objects(msg, {object_id})
+            self._watched = None if msg is None else clutter_objects(msg)
             self._controller = ClosedLoopController(
                 self.robot, self._live_scene(), planner_config, config
             )
@@ -346,8 +348,8 @@ class Execution(TrajectoryExecution):
         """What changed in the clutter since the execution started (none once released)."""
         if self._watched is None or self._scene_msg is None:
             return []
-        now = clutter_objects(self._scene_msg, {self._object_id})
-        return scene_changes(self._watched, now)
+        now = clutter_objects(self._scene_msg)
+        return changes_under_relocation(self._watched, now, self._object_id)
 
     def _live_scene(self) -> SceneWorld:
         """Objects still in the clutter, but the carried one and the request's relocated ones."""

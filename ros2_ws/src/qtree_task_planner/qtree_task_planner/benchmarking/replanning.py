@@ -47,7 +47,7 @@ ADDED_ID = 'X1'
 ADDED_RADIUS_M = 0.03  # the object an ``object_added`` event puts on the table [m]
 ADDED_HEIGHT_M = 0.15
 GAP_M = 0.01  # free distance kept between footprints when placing a moved object [m]
-EXACT_MAX_SETS = 400  # budget of the exact search that decides ``solvable`` [sets]
+EXACT_MAX_SETS = 60  # budget of the exact search that decides ``solvable`` [sets]
 SEARCH = BlockerSearchConfig(max_planner_runs=2000, time_limit_s=300.0)
 
 
@@ -61,6 +61,7 @@ class RunOutcome:
     step: int  # relocations executed before the event [-]
     changed: str  # what the event did, e.g. "'O4' moved 0.231 m"
     solvable: bool | None
+    decided_by: str  # what decided ``solvable`` (:func:`decide_solvable`)
     retrieved: bool
     replans: int
     extra_planner_runs: int
@@ -111,28 +112,31 @@ def _with(scenario: Scenario, objects: Iterable[ObjectSpec]) -> Scenario | None:
 def place(
     scenario: Scenario, obj: ObjectSpec, spots: Iterable[tuple[float, float]]
 ) -> Scenario | None:
-    """The scene with ``obj`` (new or moved, by id) at the first valid spot (x, y) [m] whose
-    footprint keeps :data:`GAP_M` from every other object; None when no spot is valid."""
-    others = [o for o in scenario.objects if o.id != obj.id]
-    for x, y in spots:
+    """The scene with ``obj`` (new or moved, by id) at the roomiest of ``spots`` (x, y) [m]: the
+    valid spot farthest from every other footprint (at least :data:`GAP_M`), as a person puts an
+    object down where it fits rather than squeezed against its neighbours (a hand needs room for
+    its fingers); None when no spot is valid."""
+    others = [o for o in scenario.objects if o.id != obj.id and o.role != 'static']
+
+    def room(xy: tuple[float, float]) -> float:
+        gaps = [math.dist(o.position[:2], xy) - _radius(o) - _radius(obj) for o in others]
+        return min(gaps, default=math.inf)
+
+    ranked = sorted((xy for xy in spots if room(xy) > GAP_M), key=room, reverse=True)
+    for x, y in ranked:
         moved = dataclasses.replace(obj, position=(float(x), float(y), obj.position[2]))
-        clear = all(
-            o.role == 'static'
-            or math.dist(o.position[:2], (x, y)) > _radius(o) + _radius(moved) + GAP_M
-            for o in others
-        )
-        if clear:
-            scene = _with(scenario, [*others, moved])
-            if scene is not None:
-                return scene
+        scene = _with(scenario, [*(o for o in scenario.objects if o.id != obj.id), moved])
+        if scene is not None:
+            return scene
     return None
 
 
 def spots_in_front(
     scenario: Scenario, of: ObjectSpec, radius_m: float
 ) -> list[tuple[float, float]]:
-    """Spots (x, y) [m] between ``of`` and the robot's base, nearest first: where an object of
-    footprint radius ``radius_m`` stands in the way of a side approach to ``of``."""
+    """Spots (x, y) [m] between ``of`` and the robot's base, up to 15 cm in front of it and 4 cm
+    aside: where an object of footprint radius ``radius_m`` stands in the way of a side approach
+    to ``of``."""
     xy = np.asarray(of.position[:2], dtype=float)
     towards = -xy / np.linalg.norm(xy)
     side = np.array([-towards[1], towards[0]])
@@ -244,6 +248,23 @@ def is_solvable(planner: Any, prefix: Sequence[str], remaining: Sequence[str], t
     return found.solvable
 
 
+def decide_solvable(
+    planner: Any, prefix: Sequence[str], remaining: Sequence[str], target: str, result: Any
+) -> tuple[bool | None, str]:
+    """Whether a retrieval still exists after the event, and what decided it: ``'re-plan'`` (it
+    found one), ``'exact'`` (the exact set search within :data:`EXACT_MAX_SETS`), else
+    ``'certificate'`` (BLOCKER-SEARCH's certified ``unsolvable``: sound under monotone
+    feasibility) or ``'none'``."""
+    if result.status == 'optimal':
+        return True, 're-plan'
+    exact = is_solvable(planner, prefix, remaining, target)
+    if exact is not None:
+        return exact, 'exact'
+    if result.status == 'unsolvable' and result.certified:
+        return False, 'certificate'
+    return None, 'none'
+
+
 def run_event(
     old: Any, sequence: Sequence[str], event: str, seed: int, make_planner: Any
 ) -> RunOutcome | None:
@@ -279,12 +300,7 @@ def run_event(
     result = learn(planner, prefix, remaining, target)
     recovery_s = time.perf_counter() - start
     retrieved = result.status == 'optimal'
-    if retrieved:
-        solvable: bool | None = True
-    elif result.status == 'unsolvable' and result.certified:
-        solvable = False
-    else:
-        solvable = is_solvable(planner, prefix, remaining, target)
+    solvable, decided_by = decide_solvable(planner, prefix, remaining, target, result)
     violations = sum(
         reverify(planner, relocated, object_id, answer)
         for (relocated, object_id), answer in kept
@@ -303,6 +319,7 @@ def run_event(
         step=step,
         changed=what,
         solvable=solvable,
+        decided_by=decided_by,
         retrieved=retrieved,
         replans=1,
         extra_planner_runs=result.planner_runs,
