@@ -117,7 +117,12 @@ class PrefixOracle:
         return self.inner.approach_blockers((*self.prefix, *relocated), object_id)
 
     def __getattr__(self, name: str) -> Any:
-        return getattr(self.inner, name)
+        inner = getattr(self.inner, name)  # AttributeError when the wrapped oracle has none
+        if name == 'clear_zone_feasible':  # a question too: after the prefix (it was asked
+            # without it, so BLOCKER-SEARCH's verifications tested another state and a re-plan
+            # with the in-process planner could miss a sequence the exact search finds)
+            return lambda relocated, object_id: inner((*self.prefix, *relocated), object_id)
+        return inner
 
 
 def combined(results: Sequence[Any], prefix: Sequence[str]) -> Any:

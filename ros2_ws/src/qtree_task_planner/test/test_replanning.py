@@ -286,3 +286,20 @@ def test_each_replan_reports_the_answers_it_reused() -> None:
     assert graph.ctx.reused_answers[0] <= len(kept)
     # the feedback of the second re-plan's training carries the first re-plan's count
     assert list(graph.feedback[-1].reused_answers) == graph.ctx.reused_answers[:1]
+
+
+def test_prefix_oracle_asks_clear_zone_questions_after_the_prefix_too() -> None:
+    asked = []
+
+    class WithClearZone:
+        planner_runs = 3
+
+        def clear_zone_feasible(self, relocated, object_id):
+            asked.append((relocated, object_id))
+            return True
+
+    oracle = PrefixOracle(WithClearZone(), ('O2',))
+    assert oracle.clear_zone_feasible(('O3',), 'T') is True
+    assert asked == [(('O2', 'O3'), 'T')] and oracle.planner_runs == 3
+    bare = PrefixOracle(TableOracle({}), ('O2',))
+    assert getattr(bare, 'clear_zone_feasible', None) is None  # then ask_clear uses feasible()
