@@ -74,20 +74,25 @@ def scene_changes(
 
 
 def changes_under_relocation(
-    before: Mapping[str, ObjectSpec], after: Mapping[str, ObjectSpec], object_id: str
+    before: Mapping[str, ObjectSpec],
+    after: Mapping[str, ObjectSpec],
+    object_id: str,
+    in_scene: bool = True,
 ) -> list[str]:
     """:func:`scene_changes` while ``object_id`` is being relocated: the object itself is
     watched too while it stands in the clutter (the hand is on its way to a grasp planned for
-    where it was), and left out once it has left the clutter (grasped and carried, or gone: the
-    grasp then says so).
+    where it was), and left out once it has left the clutter grasped (carried: the grasp then
+    says so). An object gone from the scene altogether was removed, grasped or not.
 
     Args:
         before: the clutter at the start of the relocation (:func:`clutter_objects`, nothing
             ignored).
         after: the clutter now.
         object_id: the object being relocated.
+        in_scene: whether ``object_id`` is still in the scene message under any status
+            (grasped, relocated); False when perception or a scene event removed it.
     """
-    if object_id not in after:
+    if object_id not in after and in_scene:
         before = {i: o for i, o in before.items() if i != object_id}
     return scene_changes(before, after)
 

@@ -65,3 +65,13 @@ def test_the_object_being_relocated_is_watched_until_it_leaves_the_clutter() -> 
     assert changes_under_relocation(before, after, 'T') == []
     del after['O4']  # any other object still counts
     assert changes_under_relocation(before, after, 'T') == ["'O4' removed"]
+
+
+def test_the_object_being_relocated_gone_from_the_scene_is_removed() -> None:
+    """Grasped, the object is out of the clutter but still in the scene (no change); gone from
+    the message altogether it was removed (before, both read as grasped and the hand went on to
+    an empty grasp)."""
+    before, after = objects(), objects()
+    del after['T']
+    assert changes_under_relocation(before, after, 'T', in_scene=True) == []
+    assert changes_under_relocation(before, after, 'T', in_scene=False) == ["'T' removed"]

@@ -349,7 +349,8 @@ class Execution(TrajectoryExecution):
         if self._watched is None or self._scene_msg is None:
             return []
         now = clutter_objects(self._scene_msg)
-        return changes_under_relocation(self._watched, now, self._object_id)
+        in_scene = any(o.id == self._object_id for o in self._scene_msg.objects)
+        return changes_under_relocation(self._watched, now, self._object_id, in_scene)
 
     def _live_scene(self) -> SceneWorld:
         """Objects still in the clutter, but the carried one and the request's relocated ones."""
