@@ -20,6 +20,7 @@ from qtree_scene.scene import ObjectSpec
 POSITION_TOLERANCE_M = 1e-3  # a smaller displacement is not a change [m]
 YAW_TOLERANCE_RAD = 1e-2  # a smaller rotation about z is not a change (boxes only) [rad]
 STATUS_IN_CLUTTER = 0  # ObjectState.STATUS_IN_CLUTTER
+STATUS_RELOCATED = 2  # ObjectState.STATUS_RELOCATED
 
 
 def clutter_objects(msg: Any, ignore: Collection[str] = ()) -> dict[str, ObjectSpec]:
@@ -34,6 +35,29 @@ def clutter_objects(msg: Any, ignore: Collection[str] = ()) -> dict[str, ObjectS
         spec.id: spec
         for spec, obj in zip(specs, msg.objects, strict=True)
         if obj.status == STATUS_IN_CLUTTER and spec.id not in ignore
+    }
+
+
+def standing_objects(
+    msg: Any, moving: str, left_out: Collection[str] = ()
+) -> dict[str, ObjectSpec]:
+    """The objects of a decoded ``qtree_msgs/Scene`` an arm relocating ``moving`` must clear,
+    by id, as they stand now: those IN_CLUTTER but the ids in ``left_out`` (e.g. the request's
+    relocated ones), and those already RELOCATED onto their drop slots (#29 point 5: the closed
+    loop left them out); never ``moving`` itself (carried, it is part of the arm).
+
+    Raises:
+        ScenarioError: a malformed message (see :func:`~qtree_scene.message.scenario_from_msg`).
+    """
+    specs = scenario_from_msg(msg).objects
+    return {
+        spec.id: spec
+        for spec, obj in zip(specs, msg.objects, strict=True)
+        if spec.id != moving
+        and (
+            (obj.status == STATUS_IN_CLUTTER and spec.id not in left_out)
+            or obj.status == STATUS_RELOCATED
+        )
     }
 
 

@@ -9,6 +9,7 @@ from qtree_scene.changes import (
     changes_under_relocation,
     clutter_objects,
     scene_changes,
+    standing_objects,
 )
 from qtree_scene.conversions import scene_msg
 from qtree_scene.scenario import load_scenario
@@ -75,3 +76,14 @@ def test_the_object_being_relocated_gone_from_the_scene_is_removed() -> None:
     del after['T']
     assert changes_under_relocation(before, after, 'T', in_scene=True) == []
     assert changes_under_relocation(before, after, 'T', in_scene=False) == ["'T' removed"]
+
+
+def test_standing_objects_hold_the_placed_ones_but_not_the_moving_one() -> None:
+    """#29 point 5: the closed loop's live scene left out objects already placed on their drop
+    slots; they stand there and must be cleared. The object being moved is never in it."""
+    scenario = load_scenario('s1')
+    msg = scene_msg(scenario, statuses={'O1': 'relocated', 'O2': 'grasped', 'O3': 'relocated'})
+    ids = set(standing_objects(msg, moving='O2', left_out={'O3', 'O4'}))
+    assert 'O1' in ids and 'O3' in ids  # placed: standing on their slots
+    assert 'O2' not in ids and 'O4' not in ids  # moving; left out while in the clutter
+    assert ids == {o.id for o in scenario.objects} - {'O2', 'O4'}

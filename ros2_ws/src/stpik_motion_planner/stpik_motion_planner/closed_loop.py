@@ -56,6 +56,13 @@ SETTLE_HOLD_S = 0.2
 SETTLE_M = 0.02
 
 
+# The streamed reference leads the measured arm (up to max_lead_rad); where it takes the arm is
+# checked against penetration (#29 point 5). The arm goes to the reference plus its actuator
+# offset, which the loop compensates by shifting the reference: the check adds the offset,
+# estimated from measured − streamed joints with this time constant [s] (a sudden lag, the arm
+# held back while the reference runs on, stays in the lead: that is what is checked).
+OFFSET_TIME_CONSTANT_S = 0.5
+REFERENCE_CLEARANCE_M = 0.0  # penetrating, it is a command into an object [m]
 STALL_RATE = 0.05  # reference time advancing slower than this share of real time: stalled
 
 
@@ -272,6 +279,7 @@ class ClosedLoopController:
         self._settle_s = 0.0
         self._held_s = 0.0
         self._stalled_s = 0.0
+        self._offset = np.zeros(7)  # slow estimate of measured − streamed joints [rad] (7,)
 
     @property
     def plan_time(self) -> float:
@@ -351,7 +359,13 @@ class ClosedLoopController:
         if largest > 1.0:  # never ask for more than the velocity limits
             dq /= largest
         q_ref = np.clip(self.q_ref + dq, self.stpik.lower, self.stpik.upper)
-        self.q_ref = np.clip(q_ref, q - c.max_lead_rad, q + c.max_lead_rad)
+        q_ref = np.clip(q_ref, q - c.max_lead_rad, q + c.max_lead_rad)
+        # Where the arm goes: the reference plus the arm's steady offset from what it is sent
+        # (an actuator offset the loop compensates; a lag shows up in it only slowly).
+        alpha = min(1.0, c.period / OFFSET_TIME_CONSTANT_S)
+        self._offset += alpha * ((q - self.q_ref) - self._offset)
+        self._check_reference(q_ref + self._offset)  # up to max_lead_rad ahead (#29)
+        self.q_ref = q_ref
         plan_time = self._t
         self._advance(t_next, error_m, error_rad)
         clearance = min((p.distance for p in k.scene_pairs), default=np.inf)
@@ -428,6 +442,37 @@ class ClosedLoopController:
                     f'{p.distance * 1e3:.1f} mm from {p.name_b!r} '
                     f'(margin {m.obstacle_min_distance_m * 1e3:.1f} mm)',
                 )
+
+    def _check_reference(self, q_ref: np.ndarray) -> None:
+        """Stop before streaming a reference that takes the arm to ``q_ref`` [rad] (7,) (the
+        reference plus the arm's offset) where it penetrates an object or the arm itself
+        (:data:`REFERENCE_CLEARANCE_M`).
+
+        The measured arm is checked by :meth:`_check_sets`; the reference leads it by up to
+        ``max_lead_rad``, so a reference inside an object would drive the arm there before the
+        next measurement shows it (#29 point 5). Collision only: bodies placed at ``q_ref``,
+        first hit ends the check; the kinematics of the next tick place them again.
+        """
+        stpik = self.stpik
+        stpik.place_bodies(q_ref)
+        bodies = stpik.bodies
+        if not bodies.scene_clear(self.scene, REFERENCE_CLEARANCE_M):
+            p = min(
+                bodies.scene_proximities(self.scene, REFERENCE_CLEARANCE_M),
+                key=lambda p: p.distance,
+            )
+            raise ExecutionStopped(
+                'obstacles',
+                f'the joint reference would drive {p.name_a} into {p.name_b!r} '
+                f'(distance {p.distance * 1e3:.1f} mm): held before it',
+            )
+        if not bodies.self_clear(REFERENCE_CLEARANCE_M):
+            p = min(bodies.self_proximities(REFERENCE_CLEARANCE_M), key=lambda p: p.distance)
+            raise ExecutionStopped(
+                'self_hit',
+                f'the joint reference would drive {p.name_a} into {p.name_b} '
+                f'(distance {p.distance * 1e3:.1f} mm): held before it',
+            )
 
     def _lost_message(
         self, k: Kinematics, error_m: float, error_rad: float, active: list[str]

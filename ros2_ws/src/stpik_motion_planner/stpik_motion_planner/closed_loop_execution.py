@@ -38,7 +38,7 @@ import numpy as np
 import pinocchio as pin
 from jaco2_description.model import ARM_JOINTS, Jaco2Model
 from qtree_msgs.msg import ObjectState, Scene, TrackingState
-from qtree_scene.changes import changes_under_relocation, clutter_objects
+from qtree_scene.changes import changes_under_relocation, clutter_objects, standing_objects
 from qtree_scene.message import scenario_from_msg
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
@@ -353,16 +353,15 @@ class Execution(TrajectoryExecution):
         return changes_under_relocation(self._watched, now, self._object_id, in_scene)
 
     def _live_scene(self) -> SceneWorld:
-        """Objects still in the clutter, but the carried one and the request's relocated ones."""
+        """Every object the arm must clear (:func:`qtree_scene.changes.standing_objects`): the
+        clutter but the request's relocated ones (the planner left them out too) and the objects
+        already placed on their drop slots, where they really stand (#29 point 5: they were left
+        out; the planner's slot envelopes hold them). Not the object being relocated: carried,
+        it is part of the arm; released, the retreat starts from it (the planner checked it)."""
         msg = self._scene_msg
         if msg is None:
             return SceneWorld([])
-        keep = {
-            o.id
-            for o in msg.objects
-            if o.status == ObjectState.STATUS_IN_CLUTTER and o.id not in self._removed
-        }
-        return SceneWorld(o for o in scenario_from_msg(msg).objects if o.id in keep)
+        return SceneWorld(standing_objects(msg, self._object_id, self._removed).values())
 
     def _scene_object(self, object_id: str):
         msg = self._scene_msg

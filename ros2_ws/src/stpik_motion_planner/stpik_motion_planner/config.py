@@ -37,6 +37,11 @@ RANGES: dict[str, tuple[float, float, str]] = {
         'wall-time cap of the RRTConnect of a free-space segment (past it: TIMEOUT) [s]',
     ),
     'seed': (0, 2**31 - 1, 'seed of the sampling planner [-]'),
+    'carry_tilt_limit_rad': (
+        0.0,
+        math.pi,
+        'largest tilt of the carried object from upright during the carry (#29) [rad]',
+    ),
     'approach_directions': (1, 64, 'approach yaws tried around the object [-]'),
     'approach_yaw_step_rad': (0.05, 1.6, 'yaw between consecutive approach directions [rad]'),
     'ik_restarts': (0, 50, 'random IK seeds tried after a failed pre-grasp / slot solve [-]'),
@@ -107,6 +112,9 @@ class PlannerConfig:
     pregrasp_standoff_m: float = 0.1
     grasp_depth_m: float = 0.0
     lift_clearance_m: float = 0.04
+    # A cup or a bottle stays upright: a carry transit tilting it more is replaced by an
+    # STPIK-tracked carry that holds the EE orientation (#29: up to 19.6° on s2 before).
+    carry_tilt_limit_rad: float = math.radians(10.0)
     retreat_m: float = 0.1  # the hand ends ≥ 25 mm (activation) from the placed object
     velocity_scale: float = 0.5
     slot_spacing_m: float = 0.1

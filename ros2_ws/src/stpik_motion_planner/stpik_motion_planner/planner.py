@@ -43,6 +43,7 @@ from stpik_motion_planner.cartesian_path import (
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import (
+    IkNotConverged,
     InvalidRequest,
     JointLimitViolated,
     MotionPlannerError,
@@ -425,7 +426,8 @@ class MotionPlanner:
                     if option == len(path.place_options) - 1:
                         raise
             phase = 'carry'
-            carry = stpik.transit(lift[-1], q_above, scene, deadline)
+            carry = self._upright_carry(lift[-1], q_above, in_hand, scene, deadline)
+            q_above = carry[-1]
             phase = 'place'
             place = stpik.track(
                 q_above, place_leg, scene, loose_then_tight(len(place_leg)), deadline
@@ -459,6 +461,56 @@ class MotionPlanner:
         grasp_index = sum(len(p) for p in parts[:3]) - 1
         release_index = sum(len(p) for p in parts) - 1
         return np.vstack([*parts, retreat]), grasp_index, release_index
+
+    def _upright_carry(
+        self,
+        q_lift: np.ndarray,
+        q_above: np.ndarray,
+        in_hand: pin.SE3,
+        scene: SceneWorld,
+        deadline: float,
+    ) -> np.ndarray:
+        """Carry from the lift's end to the pose above the drop slot, the object upright.
+
+        The joint transit first (collision-checked, RRTConnect when blocked); when it tilts the
+        object's axis more than ``config.carry_tilt_limit_rad`` from vertical, an STPIK-tracked
+        Cartesian carry instead (around the base like the wrist, EE orientation held by the EE
+        task, eq. 6), ending within the tracking tolerance of the pose above the slot.
+
+        Args:
+            q_lift, q_above: ends [rad] (7,).
+            in_hand: the object's pose in the EE frame.
+
+        Returns:
+            Samples after ``q_lift`` [rad] (n, 7), the last one the pose above the slot.
+        """
+        limit = self.config.carry_tilt_limit_rad
+        carry = self.stpik.transit(q_lift, q_above, scene, deadline)
+        if self._carried_tilts(carry, in_hand).max(initial=0.0) <= limit:
+            return carry
+        c = self.config
+        start, goal = self.robot.ee_pose(q_lift), self.robot.ee_pose(q_above)
+        leg = interpolate(start, goal, c.step_m, c.step_rad, wrist_arc=True)
+        tight = [False] * (len(leg) - 1) + [True]
+        carry = self.stpik.track(q_lift, leg, scene, tight, deadline, reference=q_above)
+        tilts = self._carried_tilts(carry, in_hand)
+        worst = int(np.argmax(tilts))
+        if tilts[worst] > limit:  # the EE task's tolerance admits more than the limit
+            raise IkNotConverged(
+                worst,
+                0.0,
+                float(tilts[worst] - limit),
+                f'the carried object tilts {math.degrees(tilts[worst]):.1f} deg from upright, '
+                f'limit {math.degrees(limit):.1f} deg',
+            )
+        return carry
+
+    def _carried_tilts(self, q: np.ndarray, in_hand: pin.SE3) -> np.ndarray:
+        """Angle [rad] (n,) of the carried object's axis from the world vertical at each of the
+        configurations ``q`` [rad] (n, 7)."""
+        axis = in_hand.rotation[:, 2]  # the object's z axis in the EE frame
+        cosines = np.array([self.robot.ee_pose(x).rotation[2] @ axis for x in q])
+        return np.arccos(np.clip(cosines, -1.0, 1.0))
 
     def _above_pose(
         self, q_lift: np.ndarray, above: pin.SE3, scene: SceneWorld, deadline: float

@@ -170,3 +170,42 @@ def test_planned_motion_interpolates_and_holds(plan):
     np.testing.assert_allclose(motion.joints_at(t), expected)
     np.testing.assert_allclose(motion.joints_at(1e9), result.joint_trajectory[-1])
     assert motion.ee_at(-1.0).isApprox(pin.SE3(planner.robot.ee_pose(result.joint_trajectory[0])))
+
+
+def test_a_reference_into_an_object_is_held_before_it_is_streamed(plan):
+    """#29 point 5: the streamed reference leads the measured arm by up to max_lead_rad, and
+    only the measured arm was checked: a reference inside an object (here a box standing where
+    the hand will be a few samples on, 20 mm clear of the arm as measured) was streamed and
+    drove the arm into it before the next measurement showed it. Now the tick stops first."""
+    planner, result = plan
+    q_plan = result.joint_trajectory
+    controller = ClosedLoopController(planner.robot, SceneWorld([]), planner.config)
+    lead = controller.config.max_lead_rad
+    bodies = controller.stpik.bodies
+    found = None
+    for i in range(len(q_plan) - 1):
+        for j in range(i + 1, len(q_plan)):
+            if found or np.max(np.abs(q_plan[j] - q_plan[i])) > lead:
+                break
+            wrist = planner.robot.ee_pose(q_plan[j]).translation
+            box = SceneWorld(
+                [ObjectSpec('placed', 'obstacle', 'box', tuple(wrist), size=(0.1, 0.1, 0.1))]
+            )
+            controller.stpik.place_bodies(q_plan[j])
+            inside = not bodies.scene_clear(box, 0.0)
+            controller.stpik.place_bodies(q_plan[i])
+            if inside and bodies.scene_clear(box, 0.02):
+                found = i, j, box
+    assert found is not None, 'no sample pair of the plan to test with'
+    i, j, box = found
+    controller.set_scene(box)
+    motion = PlannedMotion(result.times, q_plan, planner.robot)
+    controller.begin(motion, i, len(q_plan) - 1, q_plan[j])
+    with pytest.raises(ExecutionStopped) as stop:
+        controller.step(q_plan[i])
+    assert stop.value.cause == 'obstacles'
+    assert 'joint reference' in str(stop.value) and 'placed' in str(stop.value)
+    # The same tick without the box streams a reference.
+    controller.set_scene(SceneWorld([]))
+    controller.begin(motion, i, len(q_plan) - 1, q_plan[j])
+    assert controller.step(q_plan[i]).q_ref.shape == (7,)

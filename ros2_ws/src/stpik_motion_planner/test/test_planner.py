@@ -9,8 +9,10 @@ import time
 import fcl
 import numpy as np
 import pytest
+from qtree_scene.generator import generate_clutter
 from qtree_scene.placement import drop_slots
 from qtree_scene.scene import ObjectSpec
+from stpik_motion_planner.benchmarking.verification import carried_poses, tilt_deg
 from stpik_motion_planner.collision import object_geometry, object_transform
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import InvalidConfig, InvalidRequest
@@ -205,3 +207,30 @@ def test_a_scene_of_500_objects_is_answered_within_the_time_limit(robot, make_sc
                 Carried(scene.object(object_id), result.grasp_index, result.release_index),
             )
             assert report.ok, report.summary()
+
+
+def test_the_carried_object_stays_upright_within_the_tilt_limit(robot):
+    """#29 point 10: the joint-line carry of O8 on this generated scene tilted the object 15.0°
+    (19.6° on the benchmark's questions); the carry now holds it within the 10° limit (an
+    STPIK-tracked Cartesian carry where the joint line tilts more), and the answer stays
+    feasible and verified."""
+    scene = generate_clutter(8, 0.2, 0, layout='uniform')
+    planner = MotionPlanner(scene, model=robot)
+    planner.blockers.annotate = lambda result, *_: result
+    result = planner.check('O8', [])
+    assert result.feasible, result.message
+    tilts = [tilt_deg(p) for p in carried_poses(scene.object('O8'), result, robot)]
+    assert max(tilts) <= math.degrees(planner.config.carry_tilt_limit_rad) + 1e-6
+    poses = carried_poses(scene.object('O8'), result, robot)
+    assert np.linalg.norm(poses[-1].translation - poses[0].translation) > 0.2  # carried away
+
+
+def test_the_tilt_limit_refuses_a_carry_it_cannot_hold_upright(robot):
+    """With a limit below the tracking tolerance no carry can hold it: the same question the
+    default limit answers feasible (test above) is infeasible, never a tilted trajectory."""
+    scene = generate_clutter(8, 0.2, 0, layout='uniform')
+    planner = MotionPlanner(scene, config=PlannerConfig(carry_tilt_limit_rad=0.0), model=robot)
+    planner.blockers.annotate = lambda result, *_: result
+    result = planner.check('O8', [])
+    assert not result.feasible
+    assert result.joint_trajectory.size == 0
