@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import pytest
 from qtree_scene.scene import ObjectSpec, Scenario
 from stpik_motion_planner.config import PlannerConfig
@@ -94,9 +96,25 @@ def test_blocker_sweeps_share_the_request_time_limit(make_cylinder, robot):
         make_cylinder('O1', 0.52, 0.0),
         make_cylinder('O2', 0.45, -0.35),
     )
-    limit = 0.3  # [s]: the corridor test answers in ~10 ms, the 9 sweeps take ~1 s
+    limit = 0.3  # [s]: the corridor test answers in ~10 ms
     planner = MotionPlanner(scene, PlannerConfig(time_limit_s=limit), model=robot)
+    # The sweeps are now fast enough to finish within any small limit on an idle machine (CI of
+    # 19b121e): the first sweep is made to outlast the limit, so the deadline is hit whatever
+    # the machine's speed.
+    plan = planner.plan
+    sweeps_planned: list[float] = []
+
+    def slow_first_sweep(*args, **kwargs):
+        answer = plan(*args, **kwargs)
+        if kwargs.get('slot_index') == 0 and len(kwargs.get('yaws') or ()) == 1:
+            sweeps_planned.append(time.perf_counter())
+            if len(sweeps_planned) == 1:
+                time.sleep(limit)
+        return answer
+
+    planner.plan = slow_first_sweep
     result = planner.check('T', [])
+    assert len(sweeps_planned) == 1  # the deadline stopped the sweeps after the first one
     assert not result.feasible and not result.blocked_by_immovable
     assert 'time limit hit' in result.message
     # The sweep under way when the deadline passes finishes its arm sweep (≈ 1 s): the overrun
@@ -105,6 +123,7 @@ def test_blocker_sweeps_share_the_request_time_limit(make_cylinder, robot):
     assert 'T' not in planner.blockers.sweeps and 'T' in planner.blockers.partial
     assert planner.check('T', []).from_cache  # the feasibility answer is final
     swept = len(planner.blockers.partial['T'])
+    planner.plan = plan
     planner.config = dataclasses.replace(planner.config, time_limit_s=30.0)
     again = planner.check('T', ['O2'])  # a new request about T goes on with the sweeps
     assert again.blocking_ids == ('O1',) and 'time limit' not in again.message
