@@ -184,56 +184,17 @@ def test_max_replans_exceeded_ends_with_replan_limit(launch, ros_node) -> None:
     from action_msgs.msg import GoalStatus
 
     graph = Graph(launch, ros_node)
+    # Either may come first in the learned sequence; max_replans=0: its refused grasp is one
+    # re-plan too many (one re-plan and a second failure took 4.4 min of CI for the same check).
     fail_first = [{'kind': 'grasp_failure', 'object': o, 'attempt': 1} for o in ('O2', 'O3')]
     assert graph.set_events(fail_first).successful
     started = time.monotonic()
-    status, result = graph.result(graph.send(max_replans=1))
+    status, result = graph.result(graph.send(max_replans=0))
     print(f'\n[limit] {result.message} ({time.monotonic() - started:.0f} s)')
     assert status == GoalStatus.STATUS_ABORTED
     assert result.error_code == graph.action.Result.REPLAN_LIMIT and not result.success
-    assert result.message.startswith('max_replans=1 re-plans made, one more needed: GRASP_')
-    assert result.replans == 1 and len(result.replan_causes) == 1
+    assert result.message.startswith('max_replans=0 re-plans made, one more needed: GRASP_')
+    assert result.replans == 0 and len(result.replan_causes) == 0
     assert 'T' not in result.executed_ids
     assert graph.arm_rests_at(home()), 'the arm is not back home after the undone grasp'
-    assert graph.serving()
-
-
-def test_moved_away_added_and_target_moved_are_each_replanned(launch, ros_node) -> None:
-    """The other event kinds in one goal, each a re-plan: a blocker of the target moves out of the
-    way (O1, as the hand reaches O2), a new object appears beside the target (X1, as the hand
-    nears T), then the target itself moves under its approach; T is retrieved at its new place."""
-    from action_msgs.msg import GoalStatus
-
-    graph = Graph(launch, ros_node)
-    away = {'kind': 'move', 'object': 'O1', 'xy': [0.4, -0.35], 'hand_within_m': 0.06, 'of': 'O2'}
-    added = {
-        'kind': 'add', 'object': 'X1', 'shape': 'cylinder', 'radius': 0.03, 'height': 0.12,
-        'xy': [0.75, 0.07], 'hand_within_m': 0.15, 'of': 'T',
-    }  # fmt: skip
-    armed = graph.set_events([away, added])
-    assert armed.successful, armed.reason
-    done = graph.send(max_replans=3)
-    assert ros_node.spin_until(
-        lambda: any(f.replans >= 2 for f in graph.feedback) or done.done(), GOAL_TIMEOUT_S
-    ), 'no second re-plan'
-    assert not done.done(), done.result().result.message
-    mark = len(graph.tracking)
-    assert ros_node.spin_until(
-        lambda: any(t.object_id == 'T' for t in graph.tracking[mark:]) or done.done(),
-        GOAL_TIMEOUT_S,
-    ), 'the target was never approached again'
-    assert not done.done(), done.result().result.message
-    moved_t = graph.set_events([{'kind': 'move', 'object': 'T', 'xy': [0.8, -0.1], 'at_s': 0.3}])
-    assert moved_t.successful, moved_t.reason
-    status, result = graph.result(done)
-    causes = list(result.replan_causes)
-    print(f'\n[kinds] {result.message}\n[kinds] causes: {causes}')
-    print(f'[kinds] executed {list(result.executed_ids)}, reused {list(result.reused_answers)}')
-    assert status == GoalStatus.STATUS_SUCCEEDED, result.message
-    assert result.success and result.replans == 3 and len(result.reused_answers) == 3
-    assert "'O1' moved" in causes[0] and "'X1' added" in causes[1], causes
-    assert "SCENE_CHANGED relocating 'T'" in causes[2] and "'T' moved" in causes[2], causes
-    executed = list(result.executed_ids)
-    assert 'O1' not in executed and executed[-1] == 'T', executed  # O1 no longer in the way
-    assert ros_node.spin_until(lambda: 'T' in graph.relocated(), 10.0)
     assert graph.serving()

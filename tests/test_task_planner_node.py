@@ -181,6 +181,9 @@ def test_motion_planner_absent_or_dying(launch, ros_node) -> None:
     # the planner comes up, then dies in the middle of a training: statistics so far are kept
     mp = launch('stpik_motion_planner', 'motion_planner_node')
     mp.wait_for_log('ready', timeout_s=READY_TIMEOUT_S)
+    # Its first /scene comes 2-3 s after 'ready' (discovery): a request before it waits for the
+    # scene, and with planner_timeout_s=3 s both tries ran out (suite of 1e9c6b5: 'no feedback').
+    mp.wait_for_log('planner rebuilt', timeout_s=READY_TIMEOUT_S)
     handle = runner.send(policy='LRND', seed=4, steady_episodes=1_000_000, feedback_every=1)
     assert ros_node.spin_until(lambda: len(runner.feedback) >= 2, 120.0), 'no feedback'
     killed = time.monotonic()
