@@ -177,6 +177,10 @@ PARAMETER_CASES = [
     ),
     ('planner execution timeout 0', 'motion_planner_node', 'execution_timeout_s', 0.0, 'range'),
     ('undeclared parameter', 'motion_planner_node', 'no_such_parameter', 1.0, 'undeclared'),
+    ('grasp family unknown', 'motion_planner_node', 'grasp_families', ['side', 'up'], "'up'"),
+    ('grasp families empty', 'motion_planner_node', 'grasp_families', [''], 'unknown grasp'),
+    ('grasp families repeated', 'motion_planner_node', 'grasp_families', ['top', 'top'], 'rep'),
+    ('grasp families a number', 'motion_planner_node', 'grasp_families', 3.0, 'Wrong parameter'),
     ('task planner timeout 0', 'task_planner_node', 'planner_timeout_s', 0.0, 'range'),
     ('task planner timeout NaN', 'task_planner_node', 'scene_wait_s', math.nan, 'range'),
 ]

@@ -122,3 +122,25 @@ def test_huge_request_is_answered_logged_and_published_short(graph):
     assert len(event.relocated_ids) == 256 and event.message == answer.message
     assert node.spin_until(lambda: '(10000 ids)' in planner.log_text()[mark:], 5.0)
     assert len(planner.log_text()[mark:]) < 1000
+
+
+def test_grasp_families_parameter_adds_top_grasps_named_in_the_answer(graph):
+    """#30: the paper's side grasp by default (answers name 'side'); with grasp_families
+    ['top', 'side'] the planner, rebuilt, takes O3 of s1 from above and says so."""
+    from rclpy.parameter import Parameter
+    from rclpy.parameter_client import AsyncParameterClient
+
+    node, client, _, planner = graph
+    side = _call(node, client, 'T', ['O1', 'O2', 'O3', 'O4', 'O5'])
+    assert side.feasible and side.grasp_family == 'side', side.message
+    blocked = _call(node, client, 'T')
+    assert not blocked.feasible and blocked.grasp_family == ''
+    params = AsyncParameterClient(node, 'motion_planner')
+    assert params.wait_for_services(10.0)
+    future = params.set_parameters([Parameter('grasp_families', value=['top', 'side'])])
+    assert node.spin_until(future.done, 10.0)
+    assert all(r.successful for r in future.result().results)
+    top = _call(node, client, 'O3')
+    assert top.feasible and top.grasp_family == 'top', top.message
+    assert 'top grasp' in top.message and not top.from_cache
+    assert planner.alive()

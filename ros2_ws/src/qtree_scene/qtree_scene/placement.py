@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -56,6 +57,8 @@ WRIST_HALF_WIDTH_M = 0.045
 # scene, beside and behind the base, planned and verified in test_placement_room.py of
 # stpik_motion_planner).
 RING_MAX_M = 0.84
+# Farthest slot centre from the base axis a hand holding an object from above reaches [m].
+TOP_PLACE_REACH_M = 0.58
 RING_MIN_M = 0.46  # innermost slot ring radius [m] (the wrist must fit behind the hand)
 # Table reach around the base axis that holds every ring (+ the largest object and a margin) [m].
 DROP_TABLE_REACH_M = RING_MAX_M + 0.11
@@ -174,6 +177,30 @@ def slot_position(scenario: Scenario, index: int, obj: ObjectSpec) -> np.ndarray
     return np.array([x, y, top + object_height(obj) / 2])
 
 
+def top_place_slots(scenario: Scenario) -> tuple[tuple[Slot, ...], tuple[Slot, ...]]:
+    """The slots split for a planner that grasps from above too (#30): (side, top).
+
+    A hand holding an object from above reaches only :data:`TOP_PLACE_REACH_M` from the base
+    axis (measured from the planner's READY_TOP: top-down poses up to 0.45 m high at 0.55 m,
+    0.4 m at 0.6 m, 0.3 m at 0.65 m, 0.2 m at 0.7 m, none at 0.75 m; a tall object is carried
+    0.4 m high), so the slots in that reach are kept for top grasps and the outer ones for side
+    grasps: the k-th
+    relocation stands on side slot k or top slot k, disjoint, each a function of k only. The
+    side slots are the first of :func:`drop_slots` (outer rings first), so the simulator's
+    settling on slot k is unchanged for them; an object released on a top slot stays where it
+    was released.
+    """
+    slots = drop_slots(scenario)
+    side = tuple(s for s in slots if math.hypot(*s.xy) > TOP_PLACE_REACH_M)
+    top = tuple(s for s in slots if math.hypot(*s.xy) <= TOP_PLACE_REACH_M)
+    return side, top
+
+
+def slot_centre(scenario: Scenario, slot: Slot, obj: ObjectSpec) -> np.ndarray:
+    """Centre [m] (3,) of ``obj`` standing upright on ``slot`` on the table top."""
+    return np.array([slot.xy[0], slot.xy[1], _table(scenario).top_z + object_height(obj) / 2])
+
+
 def settle_pose(
     scenario: Scenario, index: int, obj: ObjectSpec, released: np.ndarray, yaw: float
 ) -> tuple[np.ndarray, float] | None:
@@ -203,17 +230,20 @@ def occupied_envelopes(
     scenario: Scenario,
     relocated_ids: frozenset[str] | set[str] | list[str],
     margin: float = PLACEMENT_TOLERANCE_M,
+    slots: Sequence[Slot] | None = None,
 ) -> list[ObjectSpec]:
     """Obstacles standing in the occupied slots 0 … |R|−1, as a function of the SET R only.
 
     Each is an upright cylinder of the largest footprint radius over R plus ``margin`` [m] and
     the largest height over R plus ``margin``, so it contains whichever object of R stands there
-    (placed within ``margin`` of its slot). Ids are ``'slot_<k>'``, role ``'obstacle'``.
+    (placed within ``margin`` of its slot). Ids are ``'slot_<k>'`` (k: the index in
+    :func:`drop_slots`), role ``'obstacle'``. ``slots``: the slot sequence the relocations
+    fill (default :func:`drop_slots`; one of :func:`top_place_slots`).
     """
     objects = [scenario.object(i) for i in relocated_ids]
     if not objects:
         return []
-    slots = drop_slots(scenario)
+    slots = drop_slots(scenario) if slots is None else tuple(slots)
     radius = max(footprint_radius(o) for o in objects) + margin
     height = max(object_height(o) for o in objects) + margin
     top = _table(scenario).top_z

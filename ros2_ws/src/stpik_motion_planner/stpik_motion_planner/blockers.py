@@ -1,6 +1,7 @@
 """Blockers of an infeasible relocation: which movable objects stand in the way (no ROS import).
 
-For every candidate approach yaw of an object (the planner's own ``approach_yaws``) the planner
+For every candidate approach of an object (every other one of the planner's own side yaws
+``approach_yaws`` and, when it grasps from above too, of its top yaws, :mod:`.grasps`) the planner
 is run once in the scene with every movable object removed (statics only). An approach that
 fails there is blocked by something immovable (reach, joint limits, the table). An approach that
 succeeds gives a whole motion (pre-grasp, grasp, lift, carry with the object attached, place,
@@ -50,6 +51,7 @@ class Sweep:
 
     Attributes:
         yaw: approach yaw [rad].
+        family: grasp family of the approach (:mod:`.grasps`).
         works: the motion exists in the statics-only scene.
         distances: movable object id -> smallest distance to the swept arm or carried object
             [m], only objects closer than :data:`NEAR_MARGIN_M`.
@@ -58,6 +60,7 @@ class Sweep:
     yaw: float
     works: bool
     distances: dict[str, float]
+    family: str = 'side'
 
     def blockers(self, relocated: frozenset[str], margin: float) -> list[str]:
         """Ids within ``margin`` [m] of the sweep that are not relocated."""
@@ -186,6 +189,7 @@ class BlockerFinder:
     def _compute(self, object_id: str, out: list[Sweep], deadline: float) -> bool:
         """Append the sweeps after the ``len(out)`` done to ``out``; False if cut short."""
         from stpik_motion_planner.cartesian_path import approach_yaws
+        from stpik_motion_planner.grasps import candidate_approaches, top_yaws
 
         planner = self.planner
         c = planner.config
@@ -198,16 +202,24 @@ class BlockerFinder:
         # Every other approach of the planner (twice its step): blocker reports are a heuristic,
         # one sweep per object and yaw is their whole cost.
         count, step = (c.approach_directions + 1) // 2, 2 * c.approach_yaw_step_rad
-        for yaw in approach_yaws(centre, count, step)[len(out) :]:
+        side = approach_yaws(centre, count, step)
+        approaches = candidate_approaches(centre, c.grasp_families, side)
+        if 'top' in c.grasp_families:  # every other top yaw too, like the side ones
+            top = set(top_yaws(centre)[::2])
+            approaches = [a for a in approaches if a.family != 'top' or a.yaw in top]
+        for approach in approaches[len(out) :]:
             if time.perf_counter() >= deadline:
                 return False
-            result = planner.plan(object_id, others, yaws=[yaw], slot_index=0, deadline=deadline)
+            result = planner.plan(
+                object_id, others, slot_index=0, deadline=deadline, approaches=[approach]
+            )
             if result.reason == Reason.TIMEOUT and time.perf_counter() >= deadline:
                 return False  # cut by the request's deadline (its own limit: a failed approach)
             if not result.feasible:
-                out.append(Sweep(yaw, False, {}))
+                out.append(Sweep(approach.yaw, False, {}, approach.family))
                 continue
-            out.append(Sweep(yaw, True, self._distances(result, obj, full)))
+            distances = self._distances(result, obj, full)
+            out.append(Sweep(approach.yaw, True, distances, approach.family))
         return True
 
     def _distances(self, result: PlanResult, obj, scene: SceneWorld) -> dict[str, float]:

@@ -1,4 +1,4 @@
-"""Cartesian path of a relocation (Sect. 3.1): sampling in ℝ³ (RRTConnect), side grasp only.
+"""Cartesian path of a relocation (Sect. 3.1): sampling in ℝ³ (RRTConnect), side or top grasp.
 
 No ROS import. The path is home → pre-grasp (free space: straight line, else RRTConnect) →
 grasp → lift → carry → place in the drop zone → retreat. The STPIK check
@@ -28,6 +28,7 @@ import pinocchio as pin
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import PlanningTimeout
+from stpik_motion_planner.grasps import side_rotation
 from stpik_motion_planner.hand_model import HandModel
 from stpik_motion_planner.rrt_connect import RrtConnect, question_seed
 
@@ -40,10 +41,7 @@ SHOULDER = np.array([0.0, 0.0, 0.2755])  # [m]
 WRIST_TO_EE_M = 0.2638  # [m]
 
 
-def grasp_rotation(yaw: float) -> np.ndarray:
-    """Side-grasp EE orientation: z (approach) horizontal at ``yaw`` [rad], y up; shape (3, 3)."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array([[-s, 0.0, c], [c, 0.0, s], [0.0, 1.0, 0.0]])
+grasp_rotation = side_rotation  # the paper's side grasp (other families: :mod:`.grasps`)
 
 
 def approach_yaws(position: np.ndarray, count: int, step: float) -> list[float]:
@@ -67,7 +65,9 @@ class CartesianPath:
         place_options: per candidate hand yaw at the drop slot (outward, then sideways):
             (EE pose above the slot at carry height, poses down to the release (last =
             release), poses backing off after the release).
-        approach_yaw: yaw of the approach axis [rad].
+        approach_yaw: yaw of the approach axis [rad] (a top grasp: of its closing direction,
+            see :mod:`.grasps`).
+        grasp_family: ``'side'`` or ``'top'`` (:data:`.grasps.GRASP_FAMILIES`).
     """
 
     free: list[np.ndarray]
@@ -76,6 +76,7 @@ class CartesianPath:
     lift: list[pin.SE3]
     place_options: list[tuple[pin.SE3, list[pin.SE3], list[pin.SE3]]]
     approach_yaw: float
+    grasp_family: str = 'side'
 
 
 def _spherical(v: np.ndarray) -> tuple[float, float, float]:

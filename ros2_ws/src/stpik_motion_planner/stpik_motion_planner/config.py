@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass
 
 from stpik_motion_planner.exceptions import InvalidConfig
+from stpik_motion_planner.grasps import PAPER_GRASP_FAMILIES, check_families
 
 # name -> (lower, upper, description); every bound inclusive.
 RANGES: dict[str, tuple[float, float, str]] = {
@@ -77,7 +78,7 @@ INTEGER_FIELDS = frozenset(
 
 @dataclass
 class PlannerConfig:
-    """All tunable numbers; see :data:`RANGES` for units and ranges."""
+    """All tunable numbers (see :data:`RANGES` for units and ranges) and the grasp families."""
 
     position_tolerance_m: float = 0.01
     orientation_tolerance_rad: float = 0.05
@@ -118,6 +119,9 @@ class PlannerConfig:
     retreat_m: float = 0.1  # the hand ends ≥ 25 mm (activation) from the placed object
     velocity_scale: float = 0.5
     slot_spacing_m: float = 0.1
+    # Grasp families tried, in this order (#30: 'top' for packed clutter); the paper's side
+    # grasp alone by default, so the paper scenes and tables keep their meaning.
+    grasp_families: tuple[str, ...] = PAPER_GRASP_FAMILIES
 
     def __post_init__(self) -> None:
         self.validate()
@@ -130,7 +134,12 @@ class PlannerConfig:
                 threshold is below its failure distance.
         """
         for item in dataclasses.fields(self):
-            check_value(item.name, getattr(self, item.name))
+            if item.name != 'grasp_families':
+                check_value(item.name, getattr(self, item.name))
+        try:
+            self.grasp_families = check_families(self.grasp_families)
+        except ValueError as err:
+            raise InvalidConfig('grasp_families', self.grasp_families, str(err)) from None
         if self.obstacle_activation_m < self.obstacle_min_distance_m:
             raise InvalidConfig(
                 'obstacle_activation_m', self.obstacle_activation_m, 'below obstacle_min'

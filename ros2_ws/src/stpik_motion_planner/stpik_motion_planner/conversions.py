@@ -91,6 +91,7 @@ def fill_relocate_response(
     response.blocked_by_immovable = result.blocked_by_immovable
     response.approach_blocking_ids = [i for ids in result.approach_blockers for i in ids]
     response.approach_blocker_counts = [len(ids) for ids in result.approach_blockers]
+    response.grasp_family = result.grasp_family
     return response
 
 

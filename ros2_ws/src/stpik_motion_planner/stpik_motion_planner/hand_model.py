@@ -152,6 +152,46 @@ class HandModel:
         """World centre [m] (3,) of the palm ball with the EE at ``pose``."""
         return np.asarray(pose.act(self.ball_centre), dtype=float)
 
+    def top_grasp_depth(
+        self, obj: ObjectSpec, yaw: float, clearance_m: float, iterations: int = 12
+    ) -> float:
+        """Deepest EE origin below ``obj``'s top [m] in a top grasp of closing yaw ``yaw`` [rad]
+        keeping every hand body ``clearance_m`` [m] from the object (bisection, python-fcl).
+
+        The open fingers narrow toward the palm (36 mm apart at the knuckles, 82 mm at the EE
+        origin height), so a wide object cannot go as deep as a thin one (#30: a 60 mm bottle
+        taken 29 mm deep was 4.8 mm from finger 1). 0 when even the top touches the margin.
+        """
+        from stpik_motion_planner.grasps import top_rotation
+
+        height = obj.height if obj.shape == 'cylinder' else obj.size[2]
+        if obj.shape == 'cylinder':
+            geometry = fcl.Cylinder(obj.radius, height)
+        else:
+            geometry = fcl.Box(*obj.size)
+        turn = top_rotation(yaw).T @ pin.rpy.rpyToMatrix(0.0, 0.0, obj.yaw)  # in the EE frame
+        request = fcl.DistanceRequest()
+        parts = [fcl.CollisionObject(hull, fcl.Transform()) for hull in self.at_pose.values()]
+
+        def clear(depth: float) -> bool:
+            body = fcl.CollisionObject(
+                geometry, fcl.Transform(turn, np.array([0.0, 0.0, height / 2 - depth]))
+            )
+            return all(
+                fcl.distance(body, part, request, fcl.DistanceResult()) >= clearance_m
+                for part in parts
+            )
+
+        low, high = 0.0, max(0.0, self.palm_front_m - clearance_m)
+        if not clear(low):
+            return 0.0
+        if clear(high):
+            return high
+        for _ in range(iterations):
+            middle = (low + high) / 2
+            low, high = (middle, high) if clear(middle) else (low, middle)
+        return low
+
     @property
     def palm_front_m(self) -> float:
         """Distance [m] of the palm's front face (link 7) behind the EE origin (0.039 m)."""

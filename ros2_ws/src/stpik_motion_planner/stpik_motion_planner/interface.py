@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import dataclasses
 
-from rcl_interfaces.msg import SetParametersResult
+from rcl_interfaces.msg import ParameterDescriptor, ParameterType, SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from stpik_motion_planner.config import INTEGER_FIELDS, RANGES, PlannerConfig, check_value
 from stpik_motion_planner.conversions import range_descriptor
-from stpik_motion_planner.exceptions import MotionPlannerError
+from stpik_motion_planner.exceptions import InvalidConfig, MotionPlannerError
+from stpik_motion_planner.grasps import GRASP_FAMILIES, check_families
 
 SCENE_QOS = QoSProfile(  # the /scene contract of qtree_msgs/msg/Scene.msg
     depth=1,
@@ -45,19 +46,33 @@ EXTRA = {  # name: (default, low, high, description)
 }
 
 
+FAMILIES = 'grasp_families'  # string array parameter: PlannerConfig.grasp_families (#30)
+
+
 def declare_parameters(node: Node) -> None:
-    """Declare the planner's :data:`~stpik_motion_planner.config.RANGES` and :data:`EXTRA`."""
+    """Declare the planner's :data:`~stpik_motion_planner.config.RANGES`, ``grasp_families``
+    and :data:`EXTRA`."""
     defaults = PlannerConfig()
     for name, (low, high, text) in RANGES.items():
         desc = range_descriptor(text, low, high, integer=name in INTEGER_FIELDS)
         node.declare_parameter(name, getattr(defaults, name), desc)
+    node.declare_parameter(
+        FAMILIES,
+        list(defaults.grasp_families),
+        ParameterDescriptor(
+            type=ParameterType.PARAMETER_STRING_ARRAY,
+            description=f'grasp families tried in this order, of {list(GRASP_FAMILIES)}; '
+            "['side'] is the paper's setting",
+        ),
+    )
     for name, (value, low, high, text) in EXTRA.items():
         node.declare_parameter(name, value, range_descriptor(text, low, high))
 
 
 def planner_config(node: Node) -> PlannerConfig:
     """The node's current planner parameters."""
-    return PlannerConfig(**{n: node.get_parameter(n).value for n in RANGES})
+    values = {n: node.get_parameter(n).value for n in RANGES}
+    return PlannerConfig(**values, grasp_families=tuple(node.get_parameter(FAMILIES).value))
 
 
 def check_parameters(
@@ -69,6 +84,12 @@ def check_parameters(
             if p.name in RANGES:
                 check_value(p.name, p.value)
         changes = {p.name: p.value for p in params if p.name in RANGES}
+        for p in params:
+            if p.name == FAMILIES:
+                try:
+                    changes[FAMILIES] = check_families(list(p.value or []))
+                except ValueError as err:
+                    raise InvalidConfig(FAMILIES, p.value, str(err)) from None
         config = dataclasses.replace(current, **changes)
     except (MotionPlannerError, TypeError) as err:
         return SetParametersResult(successful=False, reason=str(err)), None

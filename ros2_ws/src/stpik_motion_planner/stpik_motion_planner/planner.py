@@ -25,9 +25,12 @@ import pinocchio as pin
 from jaco2_description.model import HAND_OPENING_M, Jaco2Model
 from qtree_scene.placement import (
     PLACEMENT_TOLERANCE_M,
+    Slot,
     drop_slots,
     occupied_envelopes,
+    slot_centre,
     slot_position,
+    top_place_slots,
 )
 from qtree_scene.scene import ObjectSpec, Scenario
 
@@ -37,7 +40,6 @@ from stpik_motion_planner.cartesian_path import (
     CartesianPath,
     CartesianSampler,
     approach_yaws,
-    grasp_rotation,
     interpolate,
 )
 from stpik_motion_planner.collision import SceneWorld
@@ -55,11 +57,17 @@ from stpik_motion_planner.exceptions import (
     SelfCollision,
     VerificationFailed,
 )
+from stpik_motion_planner.grasps import (
+    Approach,
+    candidate_approaches,
+    rotation,
+    top_grasp_problem,
+)
 from stpik_motion_planner.hand_model import HandModel, grasp_width
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.robust_stpik import RobustStpik
 from stpik_motion_planner.scene_checks import validate_request, validate_scenario
-from stpik_motion_planner.stpik import Stpik
+from stpik_motion_planner.stpik import READY, READY_TOP, Stpik
 from stpik_motion_planner.verifier import STOP_CLEARANCE_M, Carried, TrajectoryVerifier
 
 HAND_BELOW_EE_M = 0.06  # lowest point of the hand below the EE origin in a side grasp [m]
@@ -69,6 +77,10 @@ MIN_SEGMENT_S = 0.05  # shortest time between two trajectory samples [s]
 # The simulator stands placed objects on their slot (qtree_scene.placement.settle_pose) [m].
 ENVELOPE_MARGIN_M = PLACEMENT_TOLERANCE_M
 HOVER_M = 0.12  # height above the pre-grasp of the descent when the joint line is blocked [m]
+# Room the open fingers of a top grasp keep from the object beyond the scene margin (#30: a
+# bottle taken 29 mm deep was 4.8 mm from finger 1 on the way out; the fingers narrow toward
+# the palm). HAND_OPENING_M has its own 5 mm per side already [m].
+TOP_GRASP_ROOM_M = 0.005
 
 
 class MotionPlanner:
@@ -158,7 +170,25 @@ class MotionPlanner:
         standing = [o for o in self.scenario.objects if o.id not in removed]
         if not envelopes:
             return standing
-        return standing + occupied_envelopes(self.scenario, relocated, ENVELOPE_MARGIN_M)
+        if 'top' not in self.config.grasp_families:
+            return standing + occupied_envelopes(self.scenario, relocated, ENVELOPE_MARGIN_M)
+        # Each relocated object stands on its side slot or its top slot (#30): both envelopes.
+        return standing + [
+            envelope
+            for slots in top_place_slots(self.scenario)
+            for envelope in occupied_envelopes(
+                self.scenario, relocated, ENVELOPE_MARGIN_M, slots=slots
+            )
+        ]
+
+    def slots(self, family: str) -> tuple[Slot, ...]:
+        """The drop slots a relocation with a ``family`` grasp fills, in relocation order: all
+        of :func:`~qtree_scene.placement.drop_slots` when the planner grasps from the side only
+        (the paper's setting), else those of :func:`~qtree_scene.placement.top_place_slots`."""
+        if 'top' not in self.config.grasp_families:
+            return drop_slots(self.scenario)
+        side, top = top_place_slots(self.scenario)
+        return top if family == 'top' else side
 
     def plan(
         self,
@@ -167,18 +197,21 @@ class MotionPlanner:
         yaws: Sequence[float] | None = None,
         slot_index: int | None = None,
         deadline: float | None = None,
+        approaches: Sequence[Approach] | None = None,
     ) -> PlanResult:
         """Plan without the cache (the request must be valid).
 
         Args:
             object_id: the object to relocate.
             relocated: the objects already relocated (gone from the clutter).
-            yaws: candidate approach yaws [rad] (default: the planner's own).
+            yaws: candidate side-approach yaws [rad] (default: the planner's own approaches of
+                every family of ``config.grasp_families``).
             slot_index: drop slot to place in with no placed objects standing (the blocker
                 sweeps of :mod:`.blockers`); default: slot ``len(relocated)`` with the occupied
                 slots 0 … len(relocated)−1 standing as envelopes.
             deadline: ``time.perf_counter()`` value to stop at [s], if earlier than the time
                 limit (the blocker sweeps share their request's budget).
+            approaches: the candidate grasps (family and yaw), instead of ``yaws``.
         """
         c = self.config
         start = time.perf_counter()
@@ -186,7 +219,7 @@ class MotionPlanner:
         timings = {'sampling': 0.0, 'stpik': 0.0, 'collision': 0.0, 'verify': 0.0}
         obj = self.scenario.object(object_id)
         index = len(relocated) if slot_index is None else slot_index
-        bad = _unplaceable(self.scenario, obj, index)
+        bad = _unplaceable(obj, index, {f: self.slots(f) for f in c.grasp_families})
         if bad is not None:
             return PlanResult(False, bad.reason, str(bad), planning_time=_since(start))
         standing = self.planning_scene(object_id, relocated, envelopes=slot_index is None)
@@ -194,31 +227,37 @@ class MotionPlanner:
         if not math.isclose(self.hand.standoff_m, c.pregrasp_standoff_m):
             self.hand = HandModel(self.robot, c.pregrasp_standoff_m)  # config changed since
         sampler = CartesianSampler(scene, c, self.hand)
-        slot = self.slot_position(index, obj)
-        slot_yaw = drop_slots(self.scenario)[index].yaw
         centre = np.asarray(obj.position, dtype=float)
         failures: list[MotionPlannerError] = []
         self.stpik.forget()  # deterministic results are shared by the two passes of one plan
         try:
-            if yaws is None:
-                yaws = approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad)
+            if approaches is None and yaws is not None:
+                approaches = [Approach('side', float(y)) for y in yaws]
+            elif approaches is None:
+                side = approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad)
+                approaches = candidate_approaches(centre, c.grasp_families, side)
             # Pass 1: every approach with the plain STPIK (fast); pass 2, only when all failed:
             # the sampled approaches again with the fallbacks of .robust_stpik (IK restarts,
             # RRTConnect transits). Same feasibility as one pass with fallbacks, far faster.
             sampled = []
-            for yaw in yaws:
-                width = grasp_width(obj, yaw)
+            for approach in approaches:
+                width = grasp_width(obj, approach.yaw)  # the fingers close alike in each family
                 if width > HAND_OPENING_M:  # #30: the width at THIS approach, boxes at any yaw
                     failures.append(
                         ObjectTooBig(
-                            f'{obj.id!r} is {width * 1000:.0f} mm across the fingers at yaw '
-                            f'{yaw:.2f} rad, the open hand closes on at most '
+                            f'{obj.id!r} is {width * 1000:.0f} mm across the fingers in a '
+                            f'{approach}, the open hand closes on at most '
                             f'{HAND_OPENING_M * 1000:.0f} mm'
                         )
                     )
                     continue
+                slots = self.slots(approach.family)
+                if index >= len(slots):  # #30: this family's slots are full
+                    failures.append(_no_slot(obj, index, slots, approach.family))
+                    continue
+                slot, slot_yaw = slot_centre(self.scenario, slots[index], obj), slots[index].yaw
                 t0 = time.perf_counter()
-                path = self._sample(sampler, scene, obj, yaw, slot, slot_yaw, failures)
+                path = self._sample(sampler, scene, obj, approach, slot, slot_yaw, failures)
                 timings['sampling'] += time.perf_counter() - t0
                 if path is None:
                     continue
@@ -283,55 +322,66 @@ class MotionPlanner:
         sampler: CartesianSampler,
         scene: SceneWorld,
         obj: ObjectSpec,
-        yaw: float,
+        approach: Approach,
         slot: np.ndarray,
         slot_yaw: float,
         failures: list,
     ) -> CartesianPath | None:
         c = self.config
-        rotation = grasp_rotation(yaw)
-        axis = rotation[:, 2]
+        yaw, top = approach.yaw, approach.family == 'top'
+        where = f'{approach.family} grasp at yaw {yaw:.2f} rad' if top else f'yaw {yaw:.2f} rad'
+        grasp_rotation = rotation(approach)
+        axis = grasp_rotation[:, 2]
         centre = np.asarray(obj.position, dtype=float)
         half = obj.height / 2 if obj.shape == 'cylinder' else obj.size[2] / 2
-        # Mid-height, raised on short objects so the hand keeps its margin to the table.
-        low = centre[2] - half + HAND_HALF_HEIGHT_M + c.obstacle_activation_m + 0.005
-        grasp_z = min(max(centre[2], low), centre[2] + half - 0.01)
-        depth = min(c.grasp_depth_m, self._palm_room(obj, yaw))
-        grasp = pin.SE3(rotation, np.r_[centre[:2], grasp_z] + depth * axis)
+        if top:  # the fingers close on the top; the palm stays above it (.grasps)
+            room = c.obstacle_min_distance_m + TOP_GRASP_ROOM_M  # the fingers off the object
+            depth = self.hand.top_grasp_depth(obj, yaw, room)
+            short = top_grasp_problem(obj, depth, c.obstacle_activation_m + 0.005)
+            if short is not None:
+                failures.append(NoCartesianPath(obj.id, f'no {where}: {short}'))
+                return None
+            grasp_z = centre[2] + half - depth
+            grasp = pin.SE3(grasp_rotation, np.r_[centre[:2], grasp_z])
+            below = grasp_z - (centre[2] - half)  # the object hangs this far below the EE
+        else:
+            # Mid-height, raised on short objects so the hand keeps its margin to the table.
+            low = centre[2] - half + HAND_HALF_HEIGHT_M + c.obstacle_activation_m + 0.005
+            grasp_z = min(max(centre[2], low), centre[2] + half - 0.01)
+            depth = min(c.grasp_depth_m, self._palm_room(obj, yaw))
+            grasp = pin.SE3(grasp_rotation, np.r_[centre[:2], grasp_z] + depth * axis)
+            below = max(half, HAND_BELOW_EE_M)
         blockers = sampler.corridor_blockers(grasp)
         if blockers:
             failures.append(
                 NoCartesianPath(
                     obj.id,
-                    f'approach corridor of the open hand at yaw {yaw:.2f} rad is blocked by '
+                    f'approach corridor of the open hand at {where} is blocked by '
                     + ', '.join(blockers),
                 )
             )
             return None
-        pregrasp = pin.SE3(rotation, grasp.translation - c.pregrasp_standoff_m * axis)
+        pregrasp = pin.SE3(grasp_rotation, grasp.translation - c.pregrasp_standoff_m * axis)
         # The palm ball, inside the hand at both ends (home and pre-grasp orientations).
         free = sampler.free_path(
             self.hand.ball_point(self.home_pose), self.hand.ball_point(pregrasp)
         )
         if not free:
-            failures.append(
-                NoCartesianPath(obj.id, f'no free path to the pre-grasp at yaw {yaw:.2f} rad')
-            )
+            failures.append(NoCartesianPath(obj.id, f'no free path to the pre-grasp at {where}'))
             return None
         tops = [o.top_z for o in scene.objects.values() if o.role != 'static']
         highest = max(tops, default=obj.position[2])
-        carry_z = max(
-            highest + c.lift_clearance_m + max(half, HAND_BELOW_EE_M), grasp.translation[2] + 0.05
-        )
-        lift = pin.SE3(rotation, np.r_[grasp.translation[:2], carry_z])
+        carry_z = max(highest + c.lift_clearance_m + below, grasp.translation[2] + 0.05)
+        lift = pin.SE3(grasp_rotation, np.r_[grasp.translation[:2], carry_z])
         slot = slot + np.r_[0.0, 0.0, grasp_z - centre[2]]  # EE height at release
         step_m, step_rad = c.step_m, c.step_rad
         options = []
         for place_yaw in (slot_yaw, slot_yaw + math.pi / 2, slot_yaw - math.pi / 2):
-            place_rotation = grasp_rotation(place_yaw)
+            place_rotation = rotation(Approach(approach.family, place_yaw))
             above = pin.SE3(place_rotation, np.r_[slot[:2], max(carry_z, CARRY_MIN_Z_M)])
             place = pin.SE3(place_rotation, slot)
-            up_and_back = np.r_[0.0, 0.0, 1.0] - place_rotation[:, 2]
+            # Side: up and back along the approach; top: straight up (back is up).
+            up_and_back = np.r_[0.0, 0.0, 1.0] - (0.0 if top else place_rotation[:, 2])
             retreat = pin.SE3(place_rotation, slot + c.retreat_m * up_and_back)
             options.append(
                 (
@@ -347,6 +397,7 @@ class MotionPlanner:
             interpolate(grasp, lift, step_m, step_rad),
             options,
             yaw,
+            approach.family,
         )
 
     def _palm_room(self, obj: ObjectSpec, yaw: float) -> float:
@@ -385,7 +436,8 @@ class MotionPlanner:
             return [False] * (n - 1) + [True]
 
         try:
-            seed = stpik.ready_posture(path.pregrasp.translation, self.home_q[0])
+            ready = READY_TOP if path.grasp_family == 'top' else READY
+            seed = stpik.ready_posture(path.pregrasp.translation, self.home_q[0], ready)
             # Until the grasp the object itself stands in the way of the arm.
             with_obj = SceneWorld([*scene.objects.values(), obj])
             q_pre = stpik.converge(seed, path.pregrasp, with_obj, deadline=deadline)
@@ -414,7 +466,7 @@ class MotionPlanner:
             phase = 'above the drop zone'
             for option, (above, place_leg, retreat_leg) in enumerate(path.place_options):  # noqa: B007
                 try:
-                    q_above = self._above_pose(lift[-1], above, scene, deadline)
+                    q_above = self._above_pose(lift[-1], above, scene, deadline, ready)
                     _outside_limit_band(q_above, stpik, band, 'pose above the drop slot')
                     # The same pose, its continuous joints the fewest turns from the lift's end:
                     # the carry transit does not spin the wrist with the object in the hand.
@@ -451,7 +503,8 @@ class MotionPlanner:
                 home = np.vstack([rise, stpik.transit(rise[-1], self.home_q, after, deadline)])
             retreat = np.vstack([retreat, home])
         except MotionPlannerError as err:
-            err.args = (f'{phase} at yaw {path.approach_yaw:.2f} rad: {err}',)
+            family = f'{path.grasp_family} grasp at ' if path.grasp_family != 'side' else ''
+            err.args = (f'{phase} at {family}yaw {path.approach_yaw:.2f} rad: {err}',)
             raise
         finally:
             stpik.bodies.detach()
@@ -513,7 +566,12 @@ class MotionPlanner:
         return np.arccos(np.clip(cosines, -1.0, 1.0))
 
     def _above_pose(
-        self, q_lift: np.ndarray, above: pin.SE3, scene: SceneWorld, deadline: float
+        self,
+        q_lift: np.ndarray,
+        above: pin.SE3,
+        scene: SceneWorld,
+        deadline: float,
+        ready: np.ndarray = READY,
     ) -> np.ndarray:
         """IK of the pose above the drop slot, first from the lift's end ``q_lift`` [rad] (7,)
         (its arm family: the carry transit then keeps the object upright, #29), else from the
@@ -524,7 +582,7 @@ class MotionPlanner:
         except PlanningTimeout:
             raise
         except MotionPlannerError:
-            seed = stpik.ready_posture(above.translation, q_lift[0])
+            seed = stpik.ready_posture(above.translation, q_lift[0], ready)
             return stpik.converge(seed, above, scene, deadline=deadline)
 
     def _placed(self, obj: ObjectSpec, q_release: np.ndarray, in_hand: pin.SE3) -> ObjectSpec:
@@ -569,10 +627,11 @@ class MotionPlanner:
         steps = np.max(np.abs(np.diff(trajectory, axis=0)) / velocity, axis=1)
         times = np.concatenate([[0.0], np.cumsum(np.maximum(steps, MIN_SEGMENT_S))])
         ee_path = np.array([pin.SE3ToXYZQUAT(self.robot.ee_pose(q)) for q in trajectory])
+        how = f'{path.grasp_family} grasp, ' if path.grasp_family != 'side' else 'approach '
         return PlanResult(
             True,
             Reason.SUCCESS,
-            f'feasible (approach yaw {path.approach_yaw:.2f} rad)',
+            f'feasible ({how}yaw {path.approach_yaw:.2f} rad)',
             times=times,
             joint_trajectory=trajectory,
             ee_path=ee_path,
@@ -581,6 +640,7 @@ class MotionPlanner:
             planning_time=_since(start),
             timings=timings,
             approach_yaw=path.approach_yaw,
+            grasp_family=path.grasp_family,
         )
 
 
@@ -603,14 +663,22 @@ def _outside_limit_band(q: np.ndarray, stpik: Stpik, band: float, what: str = 'p
         raise err
 
 
-def _unplaceable(scenario: Scenario, obj: ObjectSpec, index: int) -> MotionPlannerError | None:
-    """NO_PLACEMENT / OBJECT_TOO_BIG before any planning, else None."""
-    slots = drop_slots(scenario)
-    if index >= len(slots):
-        return NoPlacement(
-            f'no free drop slot for {obj.id!r}: relocation {index + 1} of a scene with room '
-            f'for {len(slots)} (qtree_scene.placement.drop_slots)'
-        )
+def _no_slot(obj: ObjectSpec, index: int, slots: Sequence[Slot], family: str) -> NoPlacement:
+    where = '' if family == 'side' else f' for a {family} grasp'
+    return NoPlacement(
+        f'no free drop slot{where} for {obj.id!r}: relocation {index + 1} of a scene with room '
+        f'for {len(slots)} (qtree_scene.placement.drop_slots)'
+    )
+
+
+def _unplaceable(
+    obj: ObjectSpec, index: int, slots: dict[str, tuple[Slot, ...]]
+) -> MotionPlannerError | None:
+    """NO_PLACEMENT (no family has slot ``index``) / OBJECT_TOO_BIG before any planning, else
+    None. ``slots``: per grasp family, its slots (:meth:`MotionPlanner.slots`)."""
+    if all(index >= len(s) for s in slots.values()):
+        family, most = max(slots.items(), key=lambda item: len(item[1]))
+        return _no_slot(obj, index, most, family)
     width = 2 * obj.radius if obj.shape == 'cylinder' else min(obj.size[0], obj.size[1])
     if width > HAND_OPENING_M:
         return ObjectTooBig(
@@ -622,8 +690,9 @@ def _unplaceable(scenario: Scenario, obj: ObjectSpec, index: int) -> MotionPlann
 
 def _most_informative(failures: list[MotionPlannerError], object_id: str) -> MotionPlannerError:
     """A verifier rejection first, else the first STPIK failure, else the first sampling one;
-    OBJECT_TOO_BIG (an approach at which the object is too wide) only when every approach was."""
-    others = [err for err in failures if not isinstance(err, ObjectTooBig)]
+    OBJECT_TOO_BIG (an approach at which the object is too wide) or NO_PLACEMENT (a grasp family
+    whose slots are full) only when every approach was."""
+    others = [err for err in failures if not isinstance(err, (ObjectTooBig, NoPlacement))]
     failures = others or failures
     for err in failures:
         if isinstance(err, VerificationFailed):

@@ -60,7 +60,10 @@ class PlanResult:
             unchanged (benchmarks report both, #28).
         timings: wall time by stage: ``'sampling'``, ``'stpik'``, ``'collision'`` [s].
         from_cache: True when answered from the feasibility cache.
-        approach_yaw: yaw of the approach axis used for the grasp [rad] (NaN if none).
+        approach_yaw: yaw of the approach axis used for the grasp [rad] (NaN if none); of a
+            top grasp, the yaw of its closing direction (:mod:`.grasps`).
+        grasp_family: the grasp family of a feasible answer, ``'side'`` or ``'top'`` (#30);
+            ``''`` when infeasible.
         blocking_ids: infeasible planning answers: the movable objects whose removal the planner
             believes necessary for its most promising approach (see :mod:`.blockers`).
         blocked_by_immovable: no approach works even with every movable object removed.
@@ -82,6 +85,7 @@ class PlanResult:
     timings: dict[str, float] = field(default_factory=dict)
     from_cache: bool = False
     approach_yaw: float = float('nan')
+    grasp_family: str = ''
     blocking_ids: tuple[str, ...] = ()
     blocked_by_immovable: bool = False
     approach_blockers: tuple[tuple[str, ...], ...] = ()

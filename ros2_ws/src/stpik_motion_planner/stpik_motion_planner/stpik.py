@@ -53,6 +53,10 @@ STALL_RAD_TO_M = 0.1
 # with wide joint-limit and self-hit margins, found offline by multi-start IK [rad]. Turning
 # joint 1 by -ψ turns it to azimuth ψ; the posture task pulls the arm toward that posture.
 READY = np.array([5.5, 1.37, -2.08, 1.11, 2.65, 4.53, 5.06])
+# The same for a top grasp (#30): EE pointing down at (0.55, 0, 0.25) m, the largest joint-limit
+# margin of 300 random-seed IK solutions (0.73 rad); from it, turned like READY, STPIK reaches
+# 160 of 180 top-grasp poses x 0.35-0.65 m, |y| <= 0.3 m, z 0.1-0.3 m, yaw ±1.5 rad [rad].
+READY_TOP = np.array([3.14, 3.79, 0.05, 1.93, 6.24, 4.42, 3.18])
 
 
 def damped_pinv(A: np.ndarray, damping: float, threshold: float) -> np.ndarray:
@@ -186,10 +190,13 @@ class Stpik:
         # collision) wall times [s], the latest STEP_TIMES_KEPT (benchmarks read and clear it).
         self.step_times: deque[tuple[float, float, float]] = deque(maxlen=STEP_TIMES_KEPT)
 
-    def ready_posture(self, position: np.ndarray, q1: float) -> np.ndarray:
-        """:data:`READY` turned to the azimuth of ``position`` [m], joint 1 nearest ``q1``."""
-        reference = READY.copy()
-        turned = READY[0] - math.atan2(position[1], position[0])
+    def ready_posture(
+        self, position: np.ndarray, q1: float, ready: np.ndarray = READY
+    ) -> np.ndarray:
+        """``ready`` (:data:`READY`, or :data:`READY_TOP` for a top grasp) turned to the azimuth
+        of ``position`` [m], joint 1 nearest ``q1``."""
+        reference = np.array(ready, dtype=float)
+        turned = reference[0] - math.atan2(position[1], position[0])
         turned += 2 * math.pi * round((q1 - turned) / (2 * math.pi))
         reference[0] = turned
         return reference

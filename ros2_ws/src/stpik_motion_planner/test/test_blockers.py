@@ -106,7 +106,7 @@ def test_blocker_sweeps_share_the_request_time_limit(make_cylinder, robot):
 
     def slow_first_sweep(*args, **kwargs):
         answer = plan(*args, **kwargs)
-        if kwargs.get('slot_index') == 0 and len(kwargs.get('yaws') or ()) == 1:
+        if kwargs.get('slot_index') == 0 and len(kwargs.get('approaches') or ()) == 1:
             sweeps_planned.append(time.perf_counter())
             if len(sweeps_planned) == 1:
                 time.sleep(limit)
