@@ -235,7 +235,11 @@ def _run_method(method: str, task: ScaleTask, obstacles, target, scene: SceneOra
         record.update(
             budget_hit=found.budget_hit,
             lower_bound=found.lower_bound,
-            certified=found.certified,
+            bound=found.bound,
+            # proven: the level when finished, the bound when the budget ran out (_score)
+            certified=found.bound_certified,
+            optimum_certified=found.certified,
+            rechecks=found.rechecks,
             contradictions=found.contradictions,
             status=found.status,
         )

@@ -48,10 +48,40 @@ only claims that no subset of S frees o), and the enumeration starts again from 
 (found on generated clutter, N = 50: the planner freed the target with O1 standing but not once
 O1 was gone too, and a verified constraint hid the optimum of 2 relocations).
 
-Budget. ``max_planner_runs`` (real oracle runs), ``time_limit_s`` and ``max_expansions`` (DFS
-nodes of the candidate enumeration) bound the search; hitting one returns ``status='budget'``
-with ``budget_hit`` naming it, no sequence, and ``lower_bound`` (level, target included) that is
-certified under the same conditions.
+Budget and anytime answers (issue #30, item 4). ``max_planner_runs`` (real oracle runs, rechecks
+included), ``time_limit_s`` and ``max_expansions`` (DFS nodes of the candidate enumeration)
+bound the search; hitting one returns ``status='budget'`` with ``budget_hit`` naming it,
+``certified=False`` (nothing is proven optimal), the INCUMBENT (the shortest feasible sequence
+found so far, every step an oracle answer, or ``()``) and ``bound`` (= ``lower_bound``: no
+feasible sequence is shorter; level, target included), proven when ``bound_certified`` (the
+conditions above). Incumbents: once :data:`ANYTIME_SHARE` of any budget is spent without one,
+each failed candidate (and each growth of k) is followed by a GREEDY COMPLETION from its feasible
+prefix: ask the target, else relocate the first object that the target's unmet constraints (then
+those objects' own) name, preferring objects already found feasible after a subset, until the
+target goes or nothing more can; a completion spends at most :data:`COMPLETION_SHARE` of the
+runs left. A search that ends within that share of its budgets never completes anything, so its
+answers and runs are those of the plain search. An incumbent no longer than the bound is
+optimal: the search stops there.
+
+Nothing movable (item 4.2). A verification is a question the exact search never asks; in a scene
+where no obstacle can go first, the exact search pays N + 1 runs (the target and each obstacle
+after nothing) and this search would pay those answers plus their verifications. So before its
+first verification, while no obstacle is known movable (feasible after nothing), :meth:`run`
+asks the remaining "obstacle after nothing" questions, the objects that reports name first,
+stopping at the first feasible one. If none is, nothing can ever be relocated: every answer gets
+the trivial constraint (sound without verification) and the scene is proven unsolvable within
+the exact search's N + 1 runs; else the verification goes on as before (the answers asked are
+learned when the search reaches them, as if it had asked them itself).
+
+Rechecks (item 4.3). An infeasible answer with reason ``IK_NOT_CONVERGED`` may be a false "no".
+Before a final certificate (``unsolvable``, or an optimum's "no candidate is smaller"), when the
+oracle has ``recheck(relocated, object_id)`` (more planning effort,
+:func:`~qtree_task_planner.oracle.recheck_config`), the search drops every constraint that only
+such unrechecked answers support and enumerates again: a candidate found then relies on them, and
+the answers behind the constraints it breaks are rechecked (counted in ``rechecks``). A recheck
+that stays infeasible confirms them; one that turns feasible removes the constraints it
+supported and the search goes on from the smallest size. Verification answers carry no reason
+and are not rechecked.
 """
 
 from __future__ import annotations
@@ -63,6 +93,8 @@ from itertools import combinations
 
 from qtree_task_planner.exceptions import InvalidParameterError, InvalidScenarioError
 from qtree_task_planner.oracle import (
+    REASON_IK_NOT_CONVERGED,
+    REASON_NONE,
     FeasibilityAnswer,
     FeasibilityOracle,
     SetKey,
@@ -77,6 +109,8 @@ BUDGET_RUNS = 'planner_runs'
 BUDGET_TIME = 'time'
 BUDGET_EXPANSIONS = 'expansions'
 BUDGET_CANCELLED = 'cancelled'
+ANYTIME_SHARE = 0.5  # share of a budget spent without an incumbent that starts completions [-]
+COMPLETION_SHARE = 0.75  # most of the runs left that one greedy completion may spend [-]
 
 
 @dataclass(frozen=True)
@@ -117,14 +151,22 @@ class BlockerSearchResult:
     """Outcome of one search.
 
     Attributes:
-        sequence: obstacles in relocation order, then the target; ``()`` unless ``optimal``.
+        sequence: obstacles in relocation order, then the target: the optimum when ``optimal``,
+            the incumbent (best found so far, or ``()``) when ``budget``, ``()`` when
+            ``unsolvable``.
         status: ``'optimal'``, ``'unsolvable'`` or ``'budget'``.
         lower_bound: no feasible sequence is shorter than this level (target included;
-            ``len(sequence)`` when optimal, 0 when unsolvable).
-        certified: every constraint was sound (declared or verified): the status and bound are
-            proven under Assumption 2 and monotonicity; False: heuristic.
+            ``len(sequence)`` when optimal, 0 when unsolvable); kept for compatibility.
+        certified: the status is proven (optimum, or no sequence at all) under Assumption 2 and
+            monotonicity: every constraint was sound (declared or verified); always False for
+            ``budget`` (see ``bound_certified``); False otherwise: heuristic.
         budget_hit: ``''``, ``'planner_runs'``, ``'time'`` or ``'expansions'``.
-        planner_runs: real oracle runs of this search (verifications included).
+        bound: the same level as ``lower_bound`` (``len(sequence) >= bound`` for an incumbent).
+        bound_certified: ``bound`` is proven (same conditions as ``certified``; equal to it
+            unless the budget ran out).
+        rechecks: ``IK_NOT_CONVERGED`` answers rechecked with more effort (real runs).
+        completions: greedy completions tried (see the module docstring).
+        planner_runs: real oracle runs of this search (verifications and rechecks included).
         queries: questions asked to the oracle (cached repeats excluded).
         verifications: of those, soundness checks of reports.
         contradictions: constraints contradicted by a known feasible answer (non-monotone
@@ -150,6 +192,10 @@ class BlockerSearchResult:
     constraints: int
     relevant: int
     wall_time_s: float
+    bound: int = 0
+    bound_certified: bool = False
+    rechecks: int = 0
+    completions: int = 0
 
     @property
     def solved(self) -> bool:
@@ -162,6 +208,10 @@ class _BudgetExceededError(Exception):
         self.which = which
 
 
+class _CompletionStopError(Exception):
+    """A greedy completion spent its share of the runs."""
+
+
 class BlockerSearch:
     """One search (see the module docstring); state readable after :meth:`run`.
 
@@ -171,9 +221,9 @@ class BlockerSearch:
         oracle: any feasibility oracle; blocker reports are read through
             :func:`~qtree_task_planner.oracle.ask`.
         config: budget and options.
-        on_candidate: called after each tested candidate with the objects walked (the last may
-            have failed) and whether the target was reached; returning False cancels the search
-            (``budget_hit='cancelled'``).
+        on_candidate: called after each tested candidate and each greedy completion with the
+            objects walked (the last may have failed) and whether the target was reached;
+            returning False cancels the search (``budget_hit='cancelled'``).
 
     Raises:
         InvalidScenarioError: the target is an obstacle, or duplicate ids.
@@ -216,16 +266,44 @@ class BlockerSearch:
         self.lower_bound = 1
         self._cut = False
         self._failed: dict[frozenset[str], bool] = {}
+        self.incumbent: tuple[str, ...] = ()  # shortest feasible sequence found (target last)
+        self.rechecks = self.completions = 0
+        self._rechecked: set[SetKey] = set()
+        read = getattr(oracle, 'recheck', None)
+        usable = callable(read) and bool(getattr(oracle, 'can_recheck', True))
+        self._recheck: Callable[[tuple[str, ...], str], FeasibilityAnswer] | None = (
+            read if usable else None
+        )
+        self._guard = False  # run(): exhaust "after nothing" before the first verification
+        self._movable = False  # some obstacle was found feasible after nothing
+        self._nothing_movable = False  # every obstacle was found infeasible after nothing
+        self._prefix: tuple[str, ...] = ()  # feasible prefix of the last failed candidate
+        self._cap: int | None = None  # runs count at which a completion stops
+        self._completed: set[frozenset[str]] = set()  # prefixes completed from
         self._runs0 = oracle.planner_runs
         self._start = time.monotonic()
 
     # -- oracle with constraints --
 
+    def _runs(self) -> int:
+        return self.oracle.planner_runs - self._runs0
+
     def _check_budget(self) -> None:
-        if self.oracle.planner_runs - self._runs0 >= self.config.max_planner_runs:
+        if self._runs() >= self.config.max_planner_runs:
             raise _BudgetExceededError(BUDGET_RUNS)
         if time.monotonic() - self._start > self.config.time_limit_s:
             raise _BudgetExceededError(BUDGET_TIME)
+        if self._cap is not None and self._runs() >= self._cap:
+            raise _CompletionStopError
+
+    def _hurry(self) -> bool:
+        """:data:`ANYTIME_SHARE` of some budget is spent and no incumbent is known."""
+        c, share = self.config, ANYTIME_SHARE
+        return not self.incumbent and (
+            self._runs() >= share * c.max_planner_runs
+            or time.monotonic() - self._start >= share * c.time_limit_s
+            or self.expansions >= share * c.max_expansions
+        )
 
     def _ask(self, order: tuple[str, ...], obj: str) -> FeasibilityAnswer:
         key = (frozenset(order), obj)
@@ -235,6 +313,7 @@ class BlockerSearch:
             self.answers[key] = ask(self.oracle, order, obj)
             if self.answers[key].feasible:
                 self._standing.setdefault(obj, []).append(self.all - key[0] - {obj})
+                self._movable = self._movable or (not key[0] and obj != self.target)
         return self.answers[key]
 
     def _verify(self, rest: tuple[str, ...], obj: str) -> bool:
@@ -271,7 +350,10 @@ class BlockerSearch:
         else:
             blocking = frozenset(blockers) & self.all - done - {obj}
             narrow = self._narrow(done, obj, blocking)
-            if narrow is not None and not (
+            checks = self.verify and (narrow is not None or blocking != trivial)
+            if checks and not self._may_verify():
+                blocking = trivial  # nothing movable: sound without a verification
+            elif narrow is not None and not (
                 self.verify and self._verify(self._rest(narrow, obj), obj)
             ):
                 blocking = narrow  # a sound (declared or verified) hitting set of the approaches
@@ -292,6 +374,36 @@ class BlockerSearch:
         if done not in origins:
             origins.append(done)
         self._repair(obj)
+
+    def _may_verify(self) -> bool:
+        """Whether a verification may be paid: always outside :meth:`run` or once an obstacle
+        is known movable; else first every remaining "obstacle after nothing" question (those
+        named by reports first), so that a scene where nothing is movable costs no more runs
+        than the exact search (see the module docstring). False: nothing is movable, and every
+        answer after nothing has been given its trivial constraint."""
+        if not self._guard or self._movable:
+            return True
+        if self._nothing_movable:
+            return False
+        empty: frozenset[str] = frozenset()
+        while True:
+            left = [o for o in self.obstacles if (empty, o) not in self.answers]
+            if not left:
+                break
+            named: set[str] = set()
+            for o in (self.target, *self.obstacles):
+                answer = self.answers.get((empty, o))
+                if answer is not None and answer.blocking_ids:
+                    named.update(answer.blocking_ids)
+            nxt = min(left, key=lambda o: (o not in named, self.rank[o]))
+            if self._ask((), nxt).feasible:
+                return True
+        self._nothing_movable = True
+        for o in (self.target, *self.obstacles):
+            answer = self.answers.get((empty, o))
+            if answer is not None and not answer.feasible:
+                self._learn(empty, o, None)
+        return False
 
     def _contradicted(self, obj: str, x: frozenset[str]) -> bool:
         """``obj`` was found feasible with every object of ``x`` standing (and maybe more): by
@@ -459,7 +571,8 @@ class BlockerSearch:
         return found
 
     def _test(self, order: list[str]) -> bool:
-        """Relocate the candidate in its order, then the target; False at the first failure."""
+        """Relocate the candidate in its order, then the target; False at the first failure
+        (its feasible prefix kept for a completion)."""
         self.candidates += 1
         walked: list[str] = []
         reached = True
@@ -467,44 +580,247 @@ class BlockerSearch:
             walked.append(obj)
             if not self.query(tuple(order[:i]), obj):
                 reached = False
+                self._prefix = tuple(order[:i])
                 break
-        if self.on_candidate is not None and self.on_candidate(tuple(walked), reached) is False:
-            raise _BudgetExceededError(BUDGET_CANCELLED)
+        if reached:
+            self._keep((*order, self.target))
+        self._report(tuple(walked), reached)
         return reached
+
+    def _report(self, walked: tuple[str, ...], reached: bool) -> None:
+        if self.on_candidate is not None and self.on_candidate(walked, reached) is False:
+            raise _BudgetExceededError(BUDGET_CANCELLED)
+
+    def _keep(self, sequence: tuple[str, ...]) -> None:
+        """``sequence`` (every step answered feasible) becomes the incumbent if shorter."""
+        if not self.incumbent or len(sequence) < len(self.incumbent):
+            self.incumbent = sequence
+
+    # -- anytime: greedy completions --
+
+    def _complete(self, prefix: tuple[str, ...]) -> None:
+        """Greedy completion of the feasible ``prefix`` into an incumbent (module docstring),
+        within :data:`COMPLETION_SHARE` of the runs left; every step is a real answer."""
+        if frozenset(prefix) in self._completed:
+            return
+        self._completed.add(frozenset(prefix))
+        self.completions += 1
+        left = self.config.max_planner_runs - self._runs()
+        self._cap = self._runs() + max(1, int(COMPLETION_SHARE * left))
+        order = list(prefix)
+        asked_target = reached = False
+        try:
+            while True:
+                asked_target = False
+                if self.query(tuple(order), self.target):
+                    reached = True
+                    break
+                asked_target = True
+                nxt = self._next_step(order)
+                if nxt is None:
+                    break
+                order.append(nxt)
+        except _CompletionStopError:
+            pass
+        finally:
+            self._cap = None
+        if reached:
+            self._keep((*order, self.target))
+        walked = (*order, self.target) if reached or asked_target else tuple(order)
+        if walked:
+            self._report(walked, reached)
+
+    def _next_step(self, order: list[str]) -> str | None:
+        """The first of :meth:`_next_objects` feasible after ``order`` (asked in turn; each
+        failure adds a constraint, so the objects it names are tried next), or None."""
+        while True:
+            objects = self._next_objects(order)
+            if not objects:
+                return None
+            if self.query(tuple(order), objects[0]):
+                return objects[0]
+
+    def _next_objects(self, order: list[str]) -> list[str]:
+        """Objects a completion may relocate after ``order``: those that the target's unmet
+        constraints name, smallest constraint first, then those that theirs name (breadth
+        first); objects already found feasible after a subset of ``order`` first."""
+        done = frozenset(order)
+        seen: list[str] = []
+        layer = [self.target]
+        while layer:
+            named: list[str] = []
+            for obj in layer:
+                unmet = [c for c in self.constraints.get(obj, ()) if not c & done]
+                for c in sorted(unmet, key=len):
+                    named += sorted(c - done - set(seen) - set(named), key=self.rank.__getitem__)
+            seen += named
+            layer = named
+
+        def known_feasible(obj: str) -> bool:
+            return any(
+                k[1] == obj and a.feasible and k[0] <= done for k, a in self.answers.items()
+            )
+
+        usable = [
+            o
+            for o in seen
+            if self._met(o, done) and self.answers.get((done, o), FeasibilityAnswer(True)).feasible
+        ]
+        return sorted(usable, key=lambda o: not known_feasible(o))
+
+    # -- rechecks of IK_NOT_CONVERGED answers --
+
+    def _suspect_answer(self, key: SetKey) -> bool:
+        """An unrechecked ``IK_NOT_CONVERGED`` "no" of an oracle that can recheck."""
+        answer = self.answers.get(key)
+        return (
+            self._recheck is not None
+            and key not in self._rechecked
+            and answer is not None
+            and not answer.feasible
+            and getattr(answer, 'reason', REASON_NONE) == REASON_IK_NOT_CONVERGED
+        )
+
+    def _suspects(self) -> dict[str, list[frozenset[str]]]:
+        """Constraints that only suspect answers support (object -> constraints)."""
+        found: dict[str, list[frozenset[str]]] = {}
+        for obj, sets in self.constraints.items():
+            for c in sets:
+                origins = self._origin.get((obj, c), [])
+                if origins and all(self._suspect_answer((d, obj)) for d in origins):
+                    found.setdefault(obj, []).append(c)
+        return found
+
+    def _confirm(self, size: int | None) -> bool:
+        """Recheck the suspect answers that the certificate "no candidate of at most ``size``
+        obstacles" (None: of any size) relies on (module docstring). True: the certificate
+        stands; False: a recheck turned feasible and the enumeration must start again."""
+        if self._recheck is None or (size is not None and size < 0):
+            return True
+        limit = len(self.obstacles) if size is None else size
+        while True:
+            suspects = self._suspects()
+            if not suspects:
+                return True
+            order = self._relaxed_candidate(limit, suspects)
+            if order is None:
+                return True
+            keys = self._broken(order, suspects)
+            if not keys:
+                return True  # cannot happen: the full constraints allowed no candidate
+            flipped = False
+            for key in keys:
+                flipped = self._recheck_answer(key) or flipped
+            if flipped:
+                return False
+
+    def _relaxed_candidate(
+        self, k: int, suspects: dict[str, list[frozenset[str]]]
+    ) -> list[str] | None:
+        """:meth:`_candidate` without the ``suspects`` constraints (state restored)."""
+        saved = self.constraints, self._failed, self._cut
+        self.constraints = {
+            o: [c for c in sets if c not in suspects.get(o, ())]
+            for o, sets in self.constraints.items()
+        }
+        self._failed = {}
+        try:
+            return self._candidate(k)
+        finally:
+            self.constraints, self._failed, self._cut = saved
+
+    def _broken(self, order: list[str], suspects: dict[str, list[frozenset[str]]]) -> list[SetKey]:
+        """The suspect answers behind the constraints that ``order`` (then the target) breaks."""
+        keys: list[SetKey] = []
+        done: frozenset[str] = frozenset()
+        for obj in (*order, self.target):
+            for c in suspects.get(obj, ()):
+                if not c & done:
+                    origins = self._origin.get((obj, c), [])
+                    keys += [(d, obj) for d in origins if (d, obj) not in keys]
+            done = done | {obj}
+        return keys
+
+    def _recheck_answer(self, key: SetKey) -> bool:
+        """Recheck one answer (a real run); True when it turned feasible (constraints it
+        alone supported removed)."""
+        done, obj = key
+        self._check_budget()
+        self.rechecks += 1
+        self._rechecked.add(key)
+        assert self._recheck is not None
+        relocated = tuple(o for o in self.obstacles if o in done)
+        answer = self._recheck(relocated, obj)
+        if not answer.feasible:
+            return False
+        self.answers[key] = FeasibilityAnswer(True, ())
+        for (o, _), origins in self._origin.items():
+            if o == obj and done in origins:
+                origins.remove(done)
+        self.constraints[obj] = [
+            c for c in self.constraints.get(obj, ()) if self._origin.get((obj, c))
+        ]
+        self._standing.setdefault(obj, []).append(self.all - done - {obj})
+        self._movable = self._movable or (not done and obj != self.target)
+        self._repair(obj)
+        return True
 
     # -- driver --
 
     def run(self) -> BlockerSearchResult:
-        """Search until the optimum, a proof of unsolvability, or the budget."""
-        k = 0
+        """Search until the optimum, a proof of unsolvability, or the budget (then the
+        incumbent, if any)."""
+        self._guard = True
         try:
-            while k <= len(self.obstacles):
-                self.lower_bound = k + 1
-                order = self._candidate(k)
-                if order is None:
-                    if not self._cut:  # no candidate of any size: unsolvable
-                        break
-                    k += 1
-                    self._failed = {}
-                    continue
-                if self._test(order):
-                    return self._result((*order, self.target), STATUS_OPTIMAL, '')
-                if self._restart:  # weaker constraints: smaller candidates may exist again
-                    k, self._failed, self._restart = 0, {}, False
-            self.lower_bound = 0
-            return self._result((), STATUS_UNSOLVABLE, '')
+            return self._search()
         except _BudgetExceededError as hit:
-            return self._result((), STATUS_BUDGET, hit.which)
+            return self._result(self.incumbent, STATUS_BUDGET, hit.which)
+        finally:
+            self._guard = False
+
+    def _search(self) -> BlockerSearchResult:
+        k = 0
+        while k <= len(self.obstacles):
+            self.lower_bound = k + 1
+            if self.incumbent and len(self.incumbent) <= k + 1:  # nothing shorter: optimal
+                if self._confirm(len(self.incumbent) - 2):
+                    return self._result(self.incumbent, STATUS_OPTIMAL, '')
+                k, self._failed = 0, {}
+                continue
+            order = self._candidate(k)
+            if order is None:
+                if not self._cut:  # no candidate of any size: unsolvable
+                    if self._confirm(None):
+                        break
+                    k, self._failed = 0, {}
+                    continue
+                if self._hurry():
+                    self._complete(self._prefix)
+                k += 1
+                self._failed = {}
+                continue
+            if self._test(order):
+                if self._confirm(len(order) - 1):
+                    return self._result((*order, self.target), STATUS_OPTIMAL, '')
+                k, self._failed = 0, {}
+                continue
+            if self._hurry():
+                self._complete(self._prefix)
+            if self._restart:  # weaker constraints: smaller candidates may exist again
+                k, self._failed, self._restart = 0, {}, False
+        self.lower_bound = 0
+        return self._result((), STATUS_UNSOLVABLE, '')
 
     def _result(self, sequence: tuple[str, ...], status: str, hit: str) -> BlockerSearchResult:
         relevant = {o for sets in self.constraints.values() for c in sets for o in c}
+        bound = len(sequence) if status == STATUS_OPTIMAL else self.lower_bound
         return BlockerSearchResult(
             sequence=sequence,
             status=status,
-            lower_bound=len(sequence) if sequence else self.lower_bound,
-            certified=self.certified,
+            lower_bound=bound,
+            certified=self.certified and status != STATUS_BUDGET,
             budget_hit=hit,
-            planner_runs=self.oracle.planner_runs - self._runs0,
+            planner_runs=self._runs(),
             queries=self.queries,
             verifications=self.verifications,
             contradictions=self.contradictions,
@@ -513,6 +829,10 @@ class BlockerSearch:
             constraints=sum(len(v) for v in self.constraints.values()),
             relevant=len(relevant),
             wall_time_s=time.monotonic() - self._start,
+            bound=bound,
+            bound_certified=self.certified,
+            rechecks=self.rechecks,
+            completions=self.completions,
         )
 
 

@@ -27,6 +27,14 @@ real planner does (drop slot 0, no placed objects standing), because its ordinar
 large S plans into slot |S| among |S| placed envelopes, where the drop zone, not the clutter, can
 say no: removing objects then stops being monotone and a verification would wrongly confirm a
 blocker report. Oracles without it answer with ``feasible()``.
+
+Rechecks (issue #30, item 4): an answer may carry the planner's reason code
+(``FeasibilityAnswer.reason``, equal to ``stpik_motion_planner.result.Reason`` and the
+``RelocateObject`` constants; :data:`REASON_NONE` when not given). An ``IK_NOT_CONVERGED`` "no"
+may be false (the IK stalled where another seed converges), so an oracle may implement
+``recheck(relocated, object_id)``: the same question planned again with more effort (the
+in-process planner: :func:`recheck_config`). :mod:`qtree_task_planner.blocker_search` asks it
+only for such answers that a final certificate relies on.
 """
 
 from __future__ import annotations
@@ -36,19 +44,49 @@ from itertools import accumulate
 from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 SetKey = tuple[frozenset[str], str]
+REASON_NONE = 0  # no reason given (or SUCCESS)
+REASON_IK_NOT_CONVERGED = 202  # Reason.IK_NOT_CONVERGED, RelocateObject.IK_NOT_CONVERGED
+RECHECK_IK_RESTARTS = 20  # random IK seeds of a recheck, at least [-] (default config: 5)
+RECHECK_EFFORT = 4  # time limit, restarts and RRTConnect budget of a recheck, times [-]
 
 
-class FeasibilityAnswer(NamedTuple):
-    """One answer with its blockers (unpacks as ``feasible, blocking_ids``).
+class _Answer(NamedTuple):
+    feasible: bool
+    blocking_ids: tuple[str, ...] | None = None
 
-    Attributes:
+
+class FeasibilityAnswer(_Answer):
+    """One answer with its blockers (unpacks and compares as ``feasible, blocking_ids``).
+
+    Args:
         feasible: the object can be relocated.
         blocking_ids: infeasible answers: movable ids in the way (``()``: nothing movable can
             help), or None when the oracle gave no report; ``()`` when feasible.
+        reason: the planner's reason code (:data:`REASON_NONE` when not given); an attribute
+            outside the tuple, so answers still unpack and compare as pairs.
     """
 
-    feasible: bool
-    blocking_ids: tuple[str, ...] | None = None
+    reason: int = REASON_NONE
+
+    def __new__(
+        cls,
+        feasible: bool,
+        blocking_ids: tuple[str, ...] | None = None,
+        reason: int = REASON_NONE,
+    ) -> FeasibilityAnswer:
+        """Build the pair and keep ``reason`` beside it."""
+        self = super().__new__(cls, feasible, blocking_ids)
+        self.reason = int(reason)
+        return self
+
+    def __getnewargs__(self) -> tuple[Any, ...]:
+        """Pickle (process pools) with the reason."""
+        return (self.feasible, self.blocking_ids, self.reason)
+
+    def __repr__(self) -> str:
+        """The pair, and the reason when one was given."""
+        tail = f', reason={self.reason}' if self.reason != REASON_NONE else ''
+        return f'FeasibilityAnswer({self.feasible!r}, {self.blocking_ids!r}{tail})'
 
 
 def ask(oracle: Any, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
@@ -165,6 +203,7 @@ class MemoOracle:
             cache would have run).
         queries: every call.
         results: the memo, set key -> feasible.
+        rechecks: the memo of :meth:`recheck`, set key -> answer.
     """
 
     def __init__(self, inner: FeasibilityOracle) -> None:
@@ -174,6 +213,7 @@ class MemoOracle:
         self.results: dict[SetKey, bool] = {}
         self.answers: dict[SetKey, FeasibilityAnswer] = {}
         self.clear_results: dict[SetKey, bool] = {}
+        self.rechecks: dict[SetKey, FeasibilityAnswer] = {}
         self.sound_blockers = bool(getattr(inner, 'sound_blockers', False))
 
     def clear_zone_feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
@@ -196,6 +236,27 @@ class MemoOracle:
             self.results[key] = bool(self.inner.feasible(tuple(relocated), object_id))
             self.planner_runs += 1
         return self.results[key]
+
+    @property
+    def can_recheck(self) -> bool:
+        """``inner`` has a :meth:`recheck` of its own (else this one is not offered)."""
+        return callable(getattr(self.inner, 'recheck', None))
+
+    def recheck(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
+        """``inner``'s recheck, once per pair (a real run); a feasible one updates the memo.
+
+        Raises:
+            AttributeError: ``inner`` has no recheck (see :attr:`can_recheck`).
+        """
+        self.queries += 1
+        key = (frozenset(relocated), object_id)
+        if key not in self.rechecks:
+            self.rechecks[key] = self.inner.recheck(tuple(relocated), object_id)
+            self.planner_runs += 1
+            if self.rechecks[key].feasible:
+                self.results[key] = True
+                self.answers[key] = self.rechecks[key]
+        return self.rechecks[key]
 
     def approach_blockers(
         self, relocated: tuple[str, ...], object_id: str
@@ -274,9 +335,42 @@ class MotionPlannerOracle:
         key = (frozenset(relocated), object_id)
         self._approaches[key] = approach_blockers_of(result, relocated, object_id)
         union = self._all_approach_blockers(relocated, object_id)
+        reason = int(getattr(result, 'reason', REASON_NONE) or REASON_NONE)
         if union is not None and not getattr(result, 'blocked_by_immovable', False):
-            return FeasibilityAnswer(False, union)
-        return FeasibilityAnswer(False, blockers_of(result, relocated, object_id))
+            return FeasibilityAnswer(False, union, reason)
+        return FeasibilityAnswer(False, blockers_of(result, relocated, object_id), reason)
+
+    def recheck(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
+        """The same question planned again with more effort (:func:`recheck_config`; a real
+        run, the planner's cache bypassed): for an ``IK_NOT_CONVERGED`` "no" before a proof
+        relies on it. A feasible answer replaces the cached one (its trajectory is verified
+        like any other). Not thread-safe: the planner's config is swapped during the plan.
+
+        Returns:
+            The answer, without blockers (``None``) when infeasible, with its reason.
+        """
+        planner = self.planner
+        config = planner.config
+        effort = recheck_config(config)
+        holders = [planner, *(v for v in vars(planner).values() if _holds(v, config))]
+        self.queries += 1
+        self.planner_runs += 1
+        try:
+            for holder in holders:
+                holder.config = effort
+            result = planner.plan(object_id, list(relocated))
+        finally:
+            for holder in holders:
+                holder.config = config
+        self.planning_time_s += float(getattr(result, 'planning_time', 0.0) or 0.0)
+        reason = int(getattr(result, 'reason', REASON_NONE) or REASON_NONE)
+        if not result.feasible:
+            return FeasibilityAnswer(False, None, reason)
+        cache = getattr(planner, 'cache', None)
+        if cache is not None:
+            cache.put(object_id, list(relocated), result)
+        self._approaches.pop((frozenset(relocated), object_id), None)
+        return FeasibilityAnswer(True, (), reason)
 
     def approach_blockers(
         self, relocated: tuple[str, ...], object_id: str
@@ -312,6 +406,31 @@ class MotionPlannerOracle:
             if sweep.works:
                 ids.update(sweep.blockers(done, module.HIT_MARGIN_M))
         return tuple(sorted(ids)) or None
+
+
+def recheck_config(config: Any) -> Any:
+    """The "more effort" planner config of a recheck (``PlannerConfig.replace``).
+
+    :data:`RECHECK_EFFORT` times the time limit (5 s -> 20 s), the random IK restarts of
+    ``robust_stpik`` (5 -> 20, at least :data:`RECHECK_IK_RESTARTS`), the RRTConnect transit
+    iterations and time cap (1000 -> 4000, 5 s -> 10 s; turned on when off) and twice the STPIK
+    iterations per path sample (12 -> 24), each capped at the top of its range
+    (``stpik_motion_planner.config.RANGES``). The restarts are drawn from the same seed, so the
+    recheck tries the first answer's seeds and more.
+    """
+    restarts = max(RECHECK_IK_RESTARTS, RECHECK_EFFORT * int(config.ik_restarts))
+    return config.replace(
+        time_limit_s=min(600.0, RECHECK_EFFORT * float(config.time_limit_s)),
+        ik_restarts=min(50, restarts),
+        rrt_iterations=min(100_000, RECHECK_EFFORT * max(int(config.rrt_iterations), 250)),
+        rrt_transit_s=min(10.0, RECHECK_EFFORT * max(float(config.rrt_transit_s), 1.0)),
+        max_iterations=min(100, 2 * int(config.max_iterations)),
+    )
+
+
+def _holds(value: Any, config: Any) -> bool:
+    """``value`` is one of the planner's parts that keeps ``config`` (its STPIK solver)."""
+    return value is not config and getattr(value, 'config', None) is config
 
 
 def approach_blockers_of(

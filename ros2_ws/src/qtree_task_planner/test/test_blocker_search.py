@@ -21,11 +21,13 @@ from qtree_task_planner.blocker_search import (
 from qtree_task_planner.exact import solve_exact
 from qtree_task_planner.exceptions import InvalidParameterError, InvalidScenarioError
 from qtree_task_planner.oracle import (
+    REASON_IK_NOT_CONVERGED,
     FeasibilityAnswer,
     MemoOracle,
     MotionPlannerOracle,
     TableOracle,
     approach_blockers_of,
+    recheck_config,
 )
 from qtree_task_planner.synthetic import (
     TOY_OBSTACLES,
@@ -364,3 +366,212 @@ def test_mutually_blocked_clutter_is_proven_unsolvable_without_enumerating_it() 
     result = blocker_search(obstacles, 'T', TableOracle(requirements))
     assert result.status == STATUS_UNSOLVABLE and result.certified
     assert result.planner_runs == 15 and result.expansions < 100
+
+
+# -- issue #30 item 4: anytime answers, nothing movable, rechecks --
+
+
+def test_a_budget_returns_the_incumbent_with_its_bound() -> None:
+    obstacles, requirements = random_requirements(10, np.random.default_rng(5), p_blocked=0.6)
+    exact = solve_exact(obstacles, 'T', TableOracle(requirements))
+    full = blocker_search(obstacles, 'T', TableOracle(requirements, report='none'))
+    assert full.status == STATUS_OPTIMAL and len(full.sequence) == exact.level == 5
+    assert full.completions == 0 and full.bound == full.lower_bound == exact.level
+    assert full.certified and full.bound_certified
+    oracle = TableOracle(requirements, report='none')
+    config = BlockerSearchConfig(max_planner_runs=full.planner_runs // 2)
+    cut = blocker_search(obstacles, 'T', oracle, config)
+    assert cut.status == STATUS_BUDGET and cut.budget_hit == BUDGET_RUNS and cut.completions
+    assert cut.sequence and _feasible_order(cut.sequence, requirements)  # an incumbent
+    assert len(cut.sequence) >= exact.level >= cut.bound == cut.lower_bound >= 1
+    assert not cut.certified and cut.bound_certified  # the bound is proven, the length not
+    assert oracle.planner_runs == cut.planner_runs <= config.max_planner_runs
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(
+    seed=st.integers(0, 10_000),
+    n=st.integers(2, 10),
+    report=st.sampled_from(['union', 'fewest', 'none']),
+    runs=st.integers(1, 40),
+)
+def test_a_budgeted_search_returns_nothing_or_a_feasible_sequence_above_its_bound(
+    seed, n, report, runs
+) -> None:
+    obstacles, requirements = random_requirements(n, np.random.default_rng(seed), p_blocked=0.6)
+    exact = solve_exact(obstacles, 'T', TableOracle(requirements))
+    oracle = TableOracle(requirements, report=report)
+    result = blocker_search(obstacles, 'T', oracle, BlockerSearchConfig(max_planner_runs=runs))
+    assert oracle.planner_runs <= runs
+    if result.status != STATUS_BUDGET:
+        assert result.certified and len(result.sequence) == exact.level
+        return
+    assert not result.certified and result.bound_certified
+    assert result.bound <= exact.level or not exact.solvable  # the bound is sound
+    if result.sequence:
+        assert _feasible_order(result.sequence, requirements)
+        assert len(result.sequence) >= max(exact.level, result.bound)
+
+
+_STUCK = {  # no obstacle can go first: O1 cannot move, O2 and O3 block each other, O4 needs O1
+    'T': [{'O1'}, {'O2', 'O3'}],
+    'O1': [],
+    'O2': [{'O3'}],
+    'O3': [{'O2'}],
+    'O4': [{'O1'}],
+}
+
+
+@pytest.mark.parametrize('verify', ['auto', 'always'])
+@pytest.mark.parametrize('report', ['union', 'fewest', 'none'])
+def test_nothing_movable_costs_no_more_runs_than_the_exact_search(report, verify) -> None:
+    """Before: the verifications of 'fewest' (and of 'union' with verify='always') cost 10 and
+    8 runs where the exact search stops after 5 (the target and each obstacle after nothing)."""
+    obstacles = ('O1', 'O2', 'O3', 'O4')
+    exact_oracle = TableOracle(_STUCK)
+    assert not solve_exact(obstacles, 'T', exact_oracle).solvable
+    oracle = TableOracle(_STUCK, report=report)
+    result = blocker_search(obstacles, 'T', oracle, BlockerSearchConfig(verify=verify))
+    assert result.status == STATUS_UNSOLVABLE and result.certified
+    assert oracle.planner_runs <= exact_oracle.planner_runs == 5
+
+
+def _stuck_planner() -> MemoOracle:
+    """The in-process planner's oracle on a scene where nothing moves (per-approach blockers
+    that are not sound, verifications in the empty drop zone)."""
+    answer = SimpleNamespace(
+        feasible=False,
+        from_cache=False,
+        planning_time=0.1,
+        blocking_ids=('O1', 'O2'),
+        blocked_by_immovable=False,
+        approach_blockers=(('O1', 'O2'), ('O1', 'O4')),
+    )
+    planner = SimpleNamespace(
+        check=lambda obj, relocated: answer,
+        plan=lambda obj, relocated, slot_index: SimpleNamespace(feasible=False),
+        blockers=None,
+    )
+    return MemoOracle(MotionPlannerOracle(scenario=None, planner=planner))
+
+
+def test_nothing_movable_for_the_planner_costs_no_more_runs_than_the_exact_search() -> None:
+    """Before: 6 runs (3 verifications) against the exact search's 5."""
+    obstacles = ('O1', 'O2', 'O3', 'O4')
+    exact_oracle = _stuck_planner()
+    assert not solve_exact(obstacles, 'T', exact_oracle).solvable
+    oracle = _stuck_planner()
+    result = blocker_search(obstacles, 'T', oracle)
+    assert result.status == STATUS_UNSOLVABLE and result.certified and not result.verifications
+    assert oracle.planner_runs <= exact_oracle.planner_runs == 5
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(data=st.data(), n=st.integers(1, 7), report=st.sampled_from(['union', 'fewest', 'none']))
+def test_nothing_movable_never_costs_more_than_the_exact_search(data, n, report) -> None:
+    obstacles = tuple(f'O{i}' for i in range(1, n + 1))
+    ids = st.sampled_from([*obstacles, 'T'])
+    requirements = {}
+    for obj in (*obstacles, 'T'):  # every object needs another gone, or cannot move ([])
+        others = ids.filter(lambda o, obj=obj: o not in (obj, 'T'))
+        sets = st.lists(st.sets(others, min_size=1, max_size=2), max_size=2)
+        requirements[obj] = data.draw(sets) if n > 1 else []
+    exact_oracle = TableOracle(requirements)
+    assert not solve_exact(obstacles, 'T', exact_oracle).solvable
+    oracle = TableOracle(requirements, report=report)
+    result = blocker_search(obstacles, 'T', oracle)
+    assert result.status == STATUS_UNSOLVABLE and result.certified
+    assert oracle.planner_runs <= exact_oracle.planner_runs
+
+
+class _FalseNoOracle:
+    """T needs O1 gone; the first answer "O1 after nothing" is a false IK_NOT_CONVERGED "no"
+    (blocked by nothing movable); a recheck plans O1. O2 always moves but never helps."""
+
+    sound_blockers = True
+
+    def __init__(self, can_recheck: bool = True) -> None:
+        self.planner_runs = 0
+        self.rechecked: list[tuple[tuple[str, ...], str]] = []
+        if not can_recheck:
+            self.recheck = None  # an oracle without rechecks
+
+    def _truth(self, relocated, object_id) -> FeasibilityAnswer:
+        ok = object_id != 'T' or 'O1' in relocated
+        return FeasibilityAnswer(ok, () if ok else ('O1',))
+
+    def answer(self, relocated, object_id) -> FeasibilityAnswer:
+        self.planner_runs += 1
+        if object_id == 'O1':
+            return FeasibilityAnswer(False, (), REASON_IK_NOT_CONVERGED)
+        return self._truth(relocated, object_id)
+
+    def feasible(self, relocated, object_id) -> bool:
+        return self.answer(relocated, object_id).feasible
+
+    def recheck(self, relocated, object_id) -> FeasibilityAnswer:
+        self.planner_runs += 1
+        self.rechecked.append((tuple(relocated), object_id))
+        return self._truth(relocated, object_id)
+
+
+def test_a_false_ik_no_is_rechecked_before_it_proves_the_scene_unsolvable() -> None:
+    oracle = _FalseNoOracle()
+    result = blocker_search(('O1', 'O2'), 'T', oracle)
+    assert result.status == STATUS_OPTIMAL and result.sequence == ('O1', 'T') and result.certified
+    assert result.rechecks == 1 and oracle.rechecked == [((), 'O1')]
+    assert result.planner_runs == oracle.planner_runs  # the recheck is a run too
+    memo = MemoOracle(_FalseNoOracle())  # passed through a memo, which learns the new answer
+    assert blocker_search(('O1', 'O2'), 'T', memo).sequence == ('O1', 'T')
+    assert memo.feasible((), 'O1') and memo.answer((), 'O1').feasible
+    without = blocker_search(('O1', 'O2'), 'T', _FalseNoOracle(can_recheck=False))
+    assert without.status == STATUS_UNSOLVABLE and without.rechecks == 0  # as before
+
+
+def test_only_the_answers_a_certificate_relies_on_are_rechecked() -> None:
+    # O1's false "no" is asked first, but T can also go after O2: the optimum (O2, T) and its
+    # bound ("T cannot go first") do not rely on O1's answer
+    class _Either(_FalseNoOracle):
+        def _truth(self, relocated, object_id) -> FeasibilityAnswer:
+            ok = object_id != 'T' or bool({'O1', 'O2'} & set(relocated))
+            return FeasibilityAnswer(ok, () if ok else ('O1', 'O2'))
+
+    oracle = _Either()
+    result = blocker_search(('O1', 'O2'), 'T', oracle)
+    assert result.sequence == ('O2', 'T') and result.status == STATUS_OPTIMAL
+    assert result.rechecks == 0 and oracle.rechecked == []
+    assert MemoOracle(TableOracle({})).can_recheck is False  # a memo offers only inner's
+
+
+def test_planner_oracle_rechecks_with_more_effort_and_keeps_its_reason() -> None:
+    config_module = pytest.importorskip('stpik_motion_planner.config')
+    config = config_module.PlannerConfig()
+    seen = []
+    plans = iter([SimpleNamespace(feasible=True, planning_time=0.5)])
+    stpik = SimpleNamespace(config=config)
+    cache = SimpleNamespace(entries=[], put=lambda obj, rel, res: cache.entries.append(obj))
+
+    def plan(obj, relocated):
+        seen.append((planner.config, stpik.config))
+        return next(plans)
+
+    planner = SimpleNamespace(
+        config=config,
+        stpik=stpik,
+        cache=cache,
+        blockers=None,
+        plan=plan,
+        check=lambda obj, relocated: SimpleNamespace(
+            feasible=False, reason=REASON_IK_NOT_CONVERGED, blocking_ids=(), planning_time=0.1
+        ),
+    )
+    oracle = MotionPlannerOracle(scenario=None, planner=planner)
+    first = oracle.answer((), 'O1')
+    assert first == (False, None) and first.reason == REASON_IK_NOT_CONVERGED
+    assert oracle.recheck((), 'O1') == (True, ()) and cache.entries == ['O1']
+    effort = seen[0][0]
+    assert seen[0][1] is effort and planner.config is config and stpik.config is config
+    assert effort.ik_restarts == 20 and effort.time_limit_s == 20.0
+    assert effort.max_iterations == 24 and effort.rrt_iterations == 4000
+    assert recheck_config(effort).ik_restarts == 50  # capped at the top of its range
+    assert oracle.planner_runs == 2
