@@ -7,7 +7,9 @@ area (:func:`region_size`; a scene of at most ``SMALL_SCENE`` objects gets at le
 hence may have a lower density). The obstacles are ``'O1'``… in order of increasing distance from
 the base. The same arguments always give the same scene.
 
-Two layouts:
+Two random layouts, and four packed household ones (:mod:`qtree_scene.packed_layouts`:
+``packed_rows``, ``packed_ring``, ``packed_shelf``, ``packed_mixed``; real object sizes, 1-2.5 cm
+gaps; ``density`` and the shape ranges do not apply to them):
 
 * ``'accessible'`` (default): the target ``'T'`` (a shape the open hand closes on, at most
   ``HAND_OPENING_M`` across) is placed first, inside the side-grasp workspace; then the others,
@@ -31,6 +33,7 @@ condition for the planner's corridor test, not a sufficient one (IK, joint limit
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Literal
 
@@ -47,6 +50,7 @@ from qtree_scene.layouts import (
     pick_target,
     uniform_layout,
 )
+from qtree_scene.packed_layouts import PACKED_LAYOUTS, packed_layout
 from qtree_scene.placement import DROP_TABLE_REACH_M
 from qtree_scene.scenario import TABLE_ID, validate_scenario
 from qtree_scene.scene import ObjectSpec, Scenario
@@ -66,8 +70,11 @@ LAYOUT_RESTARTS = 8  # fresh layouts tried before the density is declared imposs
 # Near edge of the clutter region per layout [m]: the accessible layout starts where objects
 # can be carried away (CARRY_MIN_REACH_M, minus a small object's radius).
 X_MIN_M = {'accessible': 0.42, 'uniform': 0.35}
-Layout = Literal['accessible', 'uniform']
-LAYOUTS: tuple[str, ...] = ('accessible', 'uniform')
+Layout = Literal[
+    'accessible', 'uniform', 'packed_rows', 'packed_ring', 'packed_shelf', 'packed_mixed'
+]
+LAYOUTS: tuple[str, ...] = ('accessible', 'uniform', *PACKED_LAYOUTS)
+KEEPOUT_M = 0.2  # the scenarios' default robot keep-out radius [m]
 
 
 def region_size(footprint_area: float, density: float) -> tuple[float, float]:
@@ -185,6 +192,9 @@ def generate_clutter(
             :mod:`qtree_scene.hand_access` (the target is placed first, in the workspace).
             ``'uniform'``: plain random sequential addition, the target drawn afterwards (the
             generator before issue #14's solvability work; many scenes are not retrievable).
+            ``'packed_*'``: household objects packed 1-2.5 cm apart around or in front of the
+            target (:mod:`qtree_scene.packed_layouts`); ``density``, the shape ranges,
+            ``box_share``, ``gap`` and ``x_min`` are checked but not used.
 
     Returns:
         A validated scenario named ``gen_<n>_<density>_<seed>``.
@@ -199,12 +209,14 @@ def generate_clutter(
         raise ScenarioError(
             'generate_clutter', 'layout', f'must be one of {LAYOUTS}, got {layout!r}'
         )
-    x_min = X_MIN_M[layout] if x_min is None else x_min
+    x_min = X_MIN_M.get(layout, 0.35) if x_min is None else x_min
     if not (isinstance(x_min, (int, float)) and math.isfinite(x_min) and 0.0 < x_min <= 1.0):
         raise ScenarioError('generate_clutter', 'x_min', f'must be in (0, 1] m, got {x_min!r}')
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ScenarioError('generate_clutter', 'seed', f'must be an int ≥ 0, got {seed!r}')
     rng = np.random.default_rng(int(seed))
+    if layout in PACKED_LAYOUTS:
+        return _packed(layout, rng, n_objects, density, seed)
     n = n_objects + 1
     shapes = _draw_shapes(rng, n, radius_range, height_range, box_share)
     depth, width = region_size(sum(s.area for s in shapes), float(density))
@@ -233,6 +245,30 @@ def generate_clutter(
         problem = f'no graspable object landed in the side-grasp workspace at density {density}'
         raise ScenarioError('generate_clutter', 'density', problem + '; raise it')
     scenario = _assemble(n_objects, density, seed, shapes, footprints, target, depth, width, x_min)
+    validate_scenario(scenario)
+    return scenario
+
+
+def _packed(
+    layout: str, rng: np.random.Generator, n_objects: int, density: float, seed: int
+) -> Scenario:
+    for _ in range(LAYOUT_RESTARTS):
+        found = packed_layout(layout, rng, n_objects, KEEPOUT_M)
+        if found is not None:
+            break
+    else:
+        problem = f'{layout} holds no {n_objects} obstacles in {LAYOUT_RESTARTS} tries'
+        raise ScenarioError('generate_clutter', 'n_objects', problem + '; ask fewer')
+    shapes, footprints = found
+    x_min = min(f.center[0] for f in footprints) - 0.12
+    depth = max(f.center[0] for f in footprints) + 0.12 - x_min
+    width = 2 * max(abs(f.center[1]) for f in footprints) + 0.24
+    scenario = _assemble(n_objects, density, seed, shapes, footprints, 0, depth, width, x_min)
+    scenario = dataclasses.replace(
+        scenario,
+        name=f'{layout}_{n_objects}_{seed}',
+        description=f'generate_clutter(n_objects={n_objects}, seed={seed}, layout={layout!r})',
+    )
     validate_scenario(scenario)
     return scenario
 

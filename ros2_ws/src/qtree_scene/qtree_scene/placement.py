@@ -59,6 +59,9 @@ WRIST_HALF_WIDTH_M = 0.045
 RING_MAX_M = 0.84
 # Farthest slot centre from the base axis a hand holding an object from above reaches [m].
 TOP_PLACE_REACH_M = 0.58
+# Nearest side slot of a planner that also grasps from above: the rings between are left free
+# for the hands placing on the top slots [m].
+SIDE_SLOT_MIN_M = 0.7
 RING_MIN_M = 0.46  # innermost slot ring radius [m] (the wrist must fit behind the hand)
 # Table reach around the base axis that holds every ring (+ the largest object and a margin) [m].
 DROP_TABLE_REACH_M = RING_MAX_M + 0.11
@@ -122,6 +125,12 @@ def _hand_hits(centre: np.ndarray, yaw: float, point: np.ndarray, radius: float)
 @functools.cache
 def drop_slots(scenario: Scenario) -> tuple[Slot, ...]:
     """The scenario's slots in relocation order, as many as the free table area in reach holds."""
+    return _ring_slots(scenario, RING_MAX_M, ())
+
+
+def _ring_slots(scenario: Scenario, rho_max: float, taken: tuple[Slot, ...]) -> tuple[Slot, ...]:
+    """Slots on rings from ``rho_max`` [m] inward (outer first), none where the hand placing
+    in one of ``taken`` would be."""
     movable = [o for o in scenario.objects if o.role != 'static']
     r_max = max((footprint_radius(o) for o in movable), default=0.03)
     table = _table(scenario)
@@ -134,7 +143,7 @@ def drop_slots(scenario: Scenario) -> tuple[Slot, ...]:
     lateral = HAND_HALF_WIDTH_M + r_max + PLACEMENT_TOLERANCE_M + SLOT_MARGIN_M
     clutter = [(np.asarray(o.position[:2], dtype=float), footprint_radius(o)) for o in movable]
     candidates = []
-    rho = RING_MAX_M
+    rho = rho_max
     while rho >= RING_MIN_M - 1e-9:
         # Neighbours on a ring are ``lateral`` apart across the hand (not along the chord, which
         # is longer: a chord of ``lateral`` put every other candidate inside a hand footprint).
@@ -154,12 +163,14 @@ def drop_slots(scenario: Scenario) -> tuple[Slot, ...]:
         rho -= radial
     candidates.sort(key=lambda c: c[:4])
     slots: list[Slot] = []
+    index = len(drop_slots(scenario)) if taken else 0  # top slots: indices after drop_slots'
     for *_, xy, yaw in candidates:
         if len(slots) == MAX_SLOTS:
             break
-        if any(_hand_hits(xy, yaw, np.asarray(s.xy), r_max) for s in slots):
+        near = (*taken, *slots)
+        if any(_hand_hits(xy, yaw, np.asarray(s.xy), r_max) for s in near):
             continue
-        slots.append(Slot(len(slots), (float(xy[0]), float(xy[1])), float(yaw)))
+        slots.append(Slot(index + len(slots), (float(xy[0]), float(xy[1])), float(yaw)))
     return tuple(slots)
 
 
@@ -177,23 +188,23 @@ def slot_position(scenario: Scenario, index: int, obj: ObjectSpec) -> np.ndarray
     return np.array([x, y, top + object_height(obj) / 2])
 
 
+@functools.cache
 def top_place_slots(scenario: Scenario) -> tuple[tuple[Slot, ...], tuple[Slot, ...]]:
-    """The slots split for a planner that grasps from above too (#30): (side, top).
+    """The slots of a planner that grasps from above too (#30): (side, top).
 
     A hand holding an object from above reaches only :data:`TOP_PLACE_REACH_M` from the base
     axis (measured from the planner's READY_TOP: top-down poses up to 0.45 m high at 0.55 m,
     0.4 m at 0.6 m, 0.3 m at 0.65 m, 0.2 m at 0.7 m, none at 0.75 m; a tall object is carried
-    0.4 m high), so the slots in that reach are kept for top grasps and the outer ones for side
-    grasps: the k-th
-    relocation stands on side slot k or top slot k, disjoint, each a function of k only. The
-    side slots are the first of :func:`drop_slots` (outer rings first), so the simulator's
-    settling on slot k is unchanged for them; an object released on a top slot stays where it
+    0.4 m high). The side slots are those of :func:`drop_slots` from :data:`SIDE_SLOT_MIN_M`
+    out (its outer rings come first, so the simulator's settling on slot k is unchanged for
+    them); the top slots lie on rings from that reach inward, the hand placing on one clear of
+    every side slot and of the top slots before it (indices after :func:`drop_slots`'). The
+    k-th relocation stands on side slot k or top slot k, each a function of k only; an object
+    released on a top slot stays where it
     was released.
     """
-    slots = drop_slots(scenario)
-    side = tuple(s for s in slots if math.hypot(*s.xy) > TOP_PLACE_REACH_M)
-    top = tuple(s for s in slots if math.hypot(*s.xy) <= TOP_PLACE_REACH_M)
-    return side, top
+    side = tuple(s for s in drop_slots(scenario) if math.hypot(*s.xy) >= SIDE_SLOT_MIN_M)
+    return side, _ring_slots(scenario, TOP_PLACE_REACH_M, side)
 
 
 def slot_centre(scenario: Scenario, slot: Slot, obj: ObjectSpec) -> np.ndarray:
