@@ -158,29 +158,41 @@ class CartesianSampler:
     def point_free(self, point: np.ndarray) -> bool:
         """True when the palm ball centred at ``point`` [m] (3,) clears the movable bodies."""
         self.validity_checks += 1
-        self._ball.setTranslation(np.asarray(point, dtype=float))
-        return not self.movable.clearance(
-            self._ball, self._ball_geometry, self.config.obstacle_min_distance_m
-        )
+        point = np.asarray(point, dtype=float)
+        self._ball.setTranslation(point)
+        margin = self.config.obstacle_min_distance_m
+        return not self.movable.probe_hits(self._ball, point, self.hand.ball_radius, margin)
 
     def segment_free(self, a: np.ndarray, b: np.ndarray) -> bool:
         """True when the palm ball swept from ``a`` to ``b`` [m] clears the movable bodies."""
         n = max(1, math.ceil(float(np.linalg.norm(b - a)) / LINE_STEP_M))
         return all(self.point_free(a + (b - a) * t) for t in np.linspace(0.0, 1.0, n + 1))
 
-    def _hits(self, parts: dict[str, fcl.Convex], pose: pin.SE3) -> list[str]:
-        """Ids of the scene bodies closer than the margin to a hand part placed at ``pose``."""
-        transform = fcl.Transform(pose.rotation, pose.translation)
+    def _hits(
+        self,
+        parts: dict[str, fcl.Convex],
+        spheres: dict[str, tuple[np.ndarray, float]],
+        pose: pin.SE3,
+    ) -> list[str]:
+        """Ids of the scene bodies closer than the margin to a hand part placed at ``pose``.
+
+        ``spheres``: per part, a bounding sphere in the EE frame (centre [m] (3,), radius [m]),
+        for the cull of :meth:`.collision.SceneWorld.probe_hits`.
+        """
+        rotation, translation = pose.rotation, pose.translation
+        transform = fcl.Transform(rotation, translation)
         margin = self.config.obstacle_min_distance_m
         hit: list[str] = []
-        for geometry in parts.values():
+        for name, geometry in parts.items():
             body = fcl.CollisionObject(geometry, transform)
-            hit += [p.name_b for p in self.scene.clearance(body, geometry, margin)]
+            centre, radius = spheres[name]
+            hit += self.scene.probe_hits(body, rotation @ centre + translation, radius, margin)
         return sorted(set(hit))
 
     def poses_free(self, poses: list[pin.SE3]) -> bool:
         """True when every hand body clears the scene (margin included) at every EE pose."""
-        return not any(self._hits(self.hand.at_pose, p) for p in poses)
+        hand = self.hand
+        return not any(self._hits(hand.at_pose, hand.at_pose_spheres, p) for p in poses)
 
     def corridor_blockers(self, grasp: pin.SE3) -> list[str]:
         """Ids of the bodies in the hand's approach corridor (pre-grasp → grasp), sorted.
@@ -196,7 +208,7 @@ class CartesianSampler:
                 f'hand swept over {self.hand.standoff_m} m, pre-grasp standoff is '
                 f'{self.config.pregrasp_standoff_m} m'
             )
-        return self._hits(self.hand.swept, grasp)
+        return self._hits(self.hand.swept, self.hand.swept_spheres, grasp)
 
     def corridor_free(self, grasp: pin.SE3) -> bool:
         """The hand's approach corridor (pre-grasp → grasp, wrist link included) is clear."""

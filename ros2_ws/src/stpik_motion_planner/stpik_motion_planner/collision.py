@@ -23,6 +23,10 @@ from stpik_motion_planner.kernels import scene_candidates, self_candidates
 
 _REQUEST = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
 _NO_DISTANCE = sys.float_info.max  # min_distance of an empty fcl.DistanceResult [m]
+# Added to a probe's bounding radius before the cull of SceneWorld.probe_hits, so that rounding
+# of the probe's placement can only let more objects through to fcl.distance [m].
+PROBE_SLACK_M = 1e-6
+_ONE_BODY = np.zeros(1, dtype=np.int64)  # the probe: body 0 of scene_candidates
 
 # Links of the 7-DoF Jaco² (short names) in the groups whose cross pairs are all non-adjacent.
 _PROXIMAL = ('link_base', 'link_1', 'link_2', 'link_3')
@@ -109,6 +113,7 @@ class SceneWorld:
         # (O, 3) of a box around it in its own frame, for the cheap lower bounds of
         # RobotBodies.scene_proximities.
         specs = list(self.objects.values())
+        self.specs = specs  # the objects in manager order (index = object index of the culls)
         self.ids = [obj.id for obj in specs]
         self.centres = np.array([obj.position for obj in specs], dtype=float).reshape(-1, 3)
         self.cos = np.array([math.cos(obj.yaw) for obj in specs], dtype=float)
@@ -133,6 +138,38 @@ class SceneWorld:
         data = _Collector({**self._names, id(geometry): 'probe'}, threshold)
         self.manager.distance(body, data, _collect)
         return [_probe_first(p) for p in data.found]
+
+    def probe_hits(
+        self, body: fcl.CollisionObject, centre: np.ndarray, radius: float, threshold: float
+    ) -> list[str]:
+        """Ids of the objects closer than ``threshold`` [m] to ``body`` (placed), whose points
+        all lie within ``radius`` [m] of ``centre`` [m] (3,) in the world frame.
+
+        The same set as the ids of :meth:`clearance` (#28: the broad-phase manager called a
+        Python callback per object near the probe's AABB): the lower bound of
+        :func:`.kernels.scene_candidates` (the sphere against a box around each object) rules
+        the far objects out, the others get the ``fcl.distance(object, probe)`` the manager's
+        callback computes, in the manager's argument order, so each distance is the same.
+        """
+        if not self.ids:
+            return []
+        _, objects = scene_candidates(
+            np.ascontiguousarray(centre, dtype=float).reshape(1, 3),
+            np.array([radius + PROBE_SLACK_M]),
+            _ONE_BODY,
+            self.centres,
+            self.cos,
+            self.sin,
+            self.half,
+            threshold,
+            False,
+        )
+        hits = []
+        for o in objects:
+            result = fcl.DistanceResult()
+            if fcl.distance(self._keep[o], body, _REQUEST, result) < threshold:
+                hits.append(self.ids[o])
+        return hits
 
 
 def _half_extents(obj: ObjectSpec) -> tuple[float, float, float]:
@@ -210,6 +247,9 @@ class RobotBodies:
         self._placed = np.zeros(len(self.bodies) + 1, dtype=bool)
         # World placement of every body, homogeneous [m] (G + 1, 4, 4), last: the carried object.
         self._placements = np.tile(np.eye(4), (len(self.bodies) + 1, 1, 1))
+        # Active logs of scene queries (:class:`SceneQuery`), appended to by every scene query
+        # (:meth:`scene_proximities`, :meth:`scene_clear`): RobustStpik's replay memo.
+        self.recorders: list[list[SceneQuery]] = []
         self._build_managers()
 
     def _build_managers(self) -> None:
@@ -237,6 +277,7 @@ class RobotBodies:
             dtype=np.int64,
         )
         self._scene_names = [names[i] for i in self._scene_index]
+        self._scene_radii = np.ascontiguousarray(self._all_radii[self._scene_index])
 
     def attach(self, obj: ObjectSpec, transform_obj_to_ee: pin.SE3, settle_m: float = 0.0) -> None:
         """Carry ``obj`` rigidly at ``transform_obj_to_ee`` (its pose in the EE frame).
@@ -369,15 +410,32 @@ class RobotBodies:
             inclusive,
         )
 
+    def _candidates(
+        self, scene: SceneWorld, threshold: float, inclusive: bool
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_scene_candidates`, logged to every active recorder (:class:`SceneQuery`)."""
+        rows, objects = self._scene_candidates(scene, threshold, inclusive)
+        if self.recorders:
+            query = SceneQuery(
+                self._centres[self._scene_index],
+                self._scene_radii,
+                threshold,
+                inclusive,
+                rows,
+                tuple(scene.specs[o] for o in objects),
+            )
+            for log in self.recorders:
+                log.append(query)
+        return rows, objects
+
     def scene_clear(self, scene: SceneWorld, threshold: float) -> bool:
         """True when every (body, scene object) pair is more than ``threshold`` [m] apart.
 
         Same bound and ``fcl.distance`` as :meth:`scene_proximities`, first hit stops it.
         """
-        if not scene.objects:
-            return True
+        rows, objects = self._candidates(scene, threshold, True)
         index = self._scene_index
-        for body, obj in zip(*self._scene_candidates(scene, threshold, True), strict=True):
+        for body, obj in zip(rows, objects, strict=True):
             result = self._fresh_result()
             robot = self._body(int(index[body]))
             if fcl.distance(robot, scene.bodies[obj], _REQUEST, result) <= threshold:
@@ -392,11 +450,10 @@ class RobotBodies:
         Only pairs whose bound is below ``threshold`` reach ``fcl.distance``, so the result
         is the same set as a query of every pair.
         """
-        if not scene.objects:
-            return []
+        rows, objects = self._candidates(scene, threshold, False)
         index = self._scene_index
         found: list[Proximity] = []
-        for body, obj in zip(*self._scene_candidates(scene, threshold, False), strict=True):
+        for body, obj in zip(rows, objects, strict=True):
             result = self._fresh_result()
             robot = self._body(int(index[body]))
             distance = fcl.distance(robot, scene.bodies[obj], _REQUEST, result)
@@ -404,6 +461,50 @@ class RobotBodies:
                 pa, pb = result.nearest_points
                 found.append(Proximity(self._scene_names[body], scene.ids[obj], distance, pa, pb))
         return found
+
+
+@dataclass(frozen=True)
+class SceneQuery:
+    """One scene query's cull, as :func:`.kernels.scene_candidates` saw it (#28 replay memo).
+
+    A query's result depends on the scene only through the pairs its cull lets through (then
+    ``fcl.distance`` of those objects): the same robot bodies give the same result in any scene
+    whose cull lets through the same (body, object) pairs in the same order.
+
+    Attributes:
+        centres: centres of the scene-checked bodies [m] (K, 3); radii: their radii [m] (K,).
+        threshold: the query's distance threshold [m]; inclusive: ``<=`` instead of ``<``.
+        rows: rows into the scene-checked bodies of the pairs let through (n,).
+        objects: the object of each of those pairs (n,).
+    """
+
+    centres: np.ndarray
+    radii: np.ndarray
+    threshold: float
+    inclusive: bool
+    rows: np.ndarray
+    objects: tuple[ObjectSpec, ...]
+
+    def replays_in(self, scene: SceneWorld) -> bool:
+        """True when the cull in ``scene`` lets through exactly the same pairs, in order."""
+        rows, objects = scene_candidates(
+            self.centres,
+            self.radii,
+            _ALL_ROWS[: len(self.radii)],
+            scene.centres,
+            scene.cos,
+            scene.sin,
+            scene.half,
+            self.threshold,
+            self.inclusive,
+        )
+        if len(rows) != len(self.rows) or not np.array_equal(rows, self.rows):
+            return False
+        specs = scene.specs
+        return all(specs[o] == spec for o, spec in zip(objects, self.objects, strict=True))
+
+
+_ALL_ROWS = np.arange(64, dtype=np.int64)  # body indices 0 … K−1 of a SceneQuery's bodies
 
 
 def _short(link: str) -> str:

@@ -113,6 +113,13 @@ def palm_ball(robot: Jaco2Model) -> tuple[np.ndarray, float]:
     raise ValueError('the robot model has no palm box (link 7)')
 
 
+def bounding_sphere(points: np.ndarray) -> tuple[np.ndarray, float]:
+    """A sphere containing ``points`` [m] (k, 3) (so their convex hull): the centre of their
+    bounding box [m] (3,) and the largest distance of a point from it [m]."""
+    centre = (points.min(axis=0) + points.max(axis=0)) / 2
+    return centre, float(np.max(np.linalg.norm(points - centre, axis=1)))
+
+
 def convex(points: np.ndarray) -> fcl.Convex:
     """python-fcl convex hull of ``points`` [m] (k, 3), in the points' frame."""
     hull = ConvexHull(points)
@@ -146,6 +153,12 @@ class HandModel:
         back = np.array([0.0, 0.0, -self.standoff_m])
         self.swept = {k: convex(np.vstack([p, p + back])) for k, p in self.parts.items()}
         self.at_pose = {k: convex(p) for k, p in self.parts.items()}
+        # Bounding spheres (centre in the EE frame [m] (3,), radius [m]) of the same hulls, for
+        # the cull of SceneWorld.probe_hits (#28).
+        self.swept_spheres = {
+            k: bounding_sphere(np.vstack([p, p + back])) for k, p in self.parts.items()
+        }
+        self.at_pose_spheres = {k: bounding_sphere(p) for k, p in self.parts.items()}
         self.ball_centre, self.ball_radius = palm_ball(robot)
 
     def ball_point(self, pose: pin.SE3) -> np.ndarray:

@@ -229,7 +229,6 @@ class MotionPlanner:
         sampler = CartesianSampler(scene, c, self.hand)
         centre = np.asarray(obj.position, dtype=float)
         failures: list[MotionPlannerError] = []
-        self.stpik.forget()  # deterministic results are shared by the two passes of one plan
         try:
             if approaches is None and yaws is not None:
                 approaches = [Approach('side', float(y)) for y in yaws]

@@ -25,22 +25,62 @@ Every trajectory still passes the planner's independent verifier before it is re
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
+from collections import OrderedDict
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from stpik_motion_planner.collision import SceneWorld
+from stpik_motion_planner.collision import SceneQuery, SceneWorld
 from stpik_motion_planner.exceptions import MotionPlannerError, PlanningTimeout
 from stpik_motion_planner.rrt_connect import RrtConnect, question_seed
 from stpik_motion_planner.stpik import Stpik, joint_segment
 
+MEMO_QUERIES = 300_000  # scene queries the memo holds (about 100 MB), oldest dropped [-]
+MEMO_ENTRY_QUERIES = 5_000  # a result with more queries is reused in its own scene only [-]
+MEMO_PER_KEY = 8  # results kept per question (different scenes) [-]
 SEED_RESOLUTION = 1e4  # target pose quantum of the restart generator's seed [1/m] [-]
 RRT_RANGE_RAD = 0.5  # longest RRTConnect extension (Euclidean in joint space) [rad]
 RRT_SHORTCUTS = 50  # random shortcut attempts on a found path [-]
+
+
+@dataclass(frozen=True)
+class _Outcome:
+    """A remembered deterministic result (:meth:`RobustStpik._remembered`).
+
+    Attributes:
+        scene: the scene's objects it was computed in.
+        queries: its scene queries (None: too many kept, reused in ``scene`` only).
+        ok: True for a returned value, False for a raised planner error.
+        value: the joint array [rad] (or None) returned, or the error raised.
+        args: the error's original arguments (its message).
+    """
+
+    scene: tuple
+    queries: list[SceneQuery] | None
+    ok: bool
+    value: object
+    args: tuple
+
+    @property
+    def size(self) -> int:
+        """Scene queries held [-] (at least 1, for the memo's budget)."""
+        return max(1, len(self.queries or ()))
+
+    def again(self) -> np.ndarray | None:
+        """The value again (a copy), or raise a copy of the error with its original message."""
+        if self.ok:
+            return None if self.value is None else np.array(self.value, copy=True)
+        value = self.value
+        again = type(value).__new__(type(value))
+        again.__dict__.update(value.__dict__)
+        again.args = self.args
+        raise again
 
 
 class RobustStpik(Stpik):
@@ -54,64 +94,95 @@ class RobustStpik(Stpik):
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        # Deterministic results of this plan (#28): the fallback pass re-asks the plain pass's
-        # questions (same seed, target, scene, carried object) before it reaches new work.
-        self._memo: dict[tuple, tuple[bool, object, tuple]] = {}
+        # Deterministic results (#28), by question without its scene (:meth:`_key`): the
+        # fallback pass re-asks the plain pass's questions, and the next plans ask most of them
+        # again in scenes that differ only far from the arm. Kept until :meth:`forget`.
+        self._memo: OrderedDict[tuple, list[_Outcome]] = OrderedDict()
+        self._memo_queries = 0  # scene queries held by the memo [-]
+        self.memo_hits = 0  # questions answered from the memo [-]
 
     def forget(self) -> None:
-        """Drop the remembered deterministic results (the planner calls it per plan)."""
+        """Drop the remembered deterministic results."""
         self._memo.clear()
+        self._memo_queries = 0
 
-    def _remembered(self, key: tuple, compute: Callable[[], np.ndarray]) -> np.ndarray:
-        """``compute()`` once per ``key``: its joint array (a copy) or its planner error again.
+    def _remembered(
+        self, key: tuple, scene: SceneWorld, compute: Callable[[], np.ndarray | None]
+    ) -> np.ndarray | None:
+        """``compute()``, or what it gave (a copy) or raised (its planner error again) before.
 
+        A result is reused in the scene it was computed in, or in any scene where every scene
+        query it made (:class:`~.collision.SceneQuery`) lets through the same pairs: the robot
+        bodies (same question) then meet the same objects, so each step, and the result, is
+        the same bit for bit (the objects the cull ruled out never entered the computation).
         PlanningTimeout is never remembered (it depends on the clock, not on the question).
         The error raised again is a copy with the original message (the planner prefixes the
         phase to the message of the error it catches).
         """
-        hit = self._memo.get(key)
-        if hit is None:
-            try:
-                value = compute()
-            except PlanningTimeout:
-                raise
-            except MotionPlannerError as err:
-                self._memo[key] = (False, err, err.args)
-                raise
-            self._memo[key] = (True, np.array(value, copy=True), ())
-            return value
-        ok, value, args = hit
-        if ok:
-            return np.array(value, copy=True)
-        again = type(value).__new__(type(value))
-        again.__dict__.update(value.__dict__)
-        again.args = args
-        raise again
+        objects = tuple(scene.objects.values())
+        for outcome in self._memo.get(key, ()):
+            if outcome.scene == objects or (
+                outcome.queries is not None and all(q.replays_in(scene) for q in outcome.queries)
+            ):
+                self._memo.move_to_end(key)
+                self.memo_hits += 1
+                for log in self.bodies.recorders:  # an enclosing computation's queries
+                    log.extend(outcome.queries or ())
+                return outcome.again()
+        log: list[SceneQuery] = []
+        self.bodies.recorders.append(log)
+        try:
+            value = compute()
+        except PlanningTimeout:
+            raise
+        except MotionPlannerError as err:
+            self._keep(key, _Outcome(objects, log, False, err, err.args))
+            raise
+        finally:
+            self.bodies.recorders.pop()
+        copy = None if value is None else np.array(value, copy=True)
+        self._keep(key, _Outcome(objects, log, True, copy, ()))
+        return value
 
-    def _key(self, name: str, scene: SceneWorld, *arrays: np.ndarray, extra: tuple = ()) -> tuple:
-        """Hashable identity of a deterministic question: arrays by value, the scene by its
-        objects, the carried object."""
+    def _keep(self, key: tuple, outcome: _Outcome) -> None:
+        """Remember ``outcome`` under ``key``, within :data:`MEMO_QUERIES` (oldest dropped)."""
+        if len(outcome.queries) > MEMO_ENTRY_QUERIES:  # reused in its own scene only
+            outcome = dataclasses.replace(outcome, queries=None)
+        entries = self._memo.setdefault(key, [])
+        self._memo.move_to_end(key)
+        entries.append(outcome)
+        self._memo_queries += outcome.size
+        if len(entries) > MEMO_PER_KEY:
+            self._memo_queries -= entries.pop(0).size
+        while self._memo_queries > MEMO_QUERIES and len(self._memo) > 1:
+            _, dropped = self._memo.popitem(last=False)
+            self._memo_queries -= sum(o.size for o in dropped)
+
+    def _key(self, name: str, *arrays: np.ndarray, extra: tuple = ()) -> tuple:
+        """Hashable identity of a deterministic question without its scene: arrays by value,
+        the carried object, the configuration's values."""
+        config = self.config
         return (
             name,
             *(np.asarray(a, dtype=float).tobytes() for a in arrays),
-            tuple(scene.objects.values()),
             self.bodies.attach_key,
             extra,
+            tuple(getattr(config, f.name) for f in dataclasses.fields(config)),
         )
 
     def _plain_converge(self, seed, target, scene, iterations, deadline) -> np.ndarray:
-        key = self._key('converge', scene, seed, target.homogeneous, extra=(iterations,))
+        key = self._key('converge', seed, target.homogeneous, extra=(iterations,))
         return self._remembered(
-            key, lambda: Stpik.converge(self, seed, target, scene, iterations, deadline)
+            key, scene, lambda: Stpik.converge(self, seed, target, scene, iterations, deadline)
         )
 
     def track(self, q, samples, scene, tight, deadline=np.inf, reference=None):
         """:meth:`Stpik.track`, remembered per plan (deterministic; see :meth:`forget`)."""
         poses = np.array([s.homogeneous for s in samples])
         ref = np.asarray(q if reference is None else reference, dtype=float)
-        key = self._key('track', scene, q, poses, ref, extra=tuple(bool(t) for t in tight))
+        key = self._key('track', q, poses, ref, extra=tuple(bool(t) for t in tight))
         return self._remembered(
-            key, lambda: Stpik.track(self, q, samples, scene, tight, deadline, reference)
+            key, scene, lambda: Stpik.track(self, q, samples, scene, tight, deadline, reference)
         )
 
     @property
@@ -158,8 +229,10 @@ class RobustStpik(Stpik):
     def transit(self, q_a, q_b, scene, deadline=np.inf):
         """Straight joint move, else RRTConnect in joint space (see the module docstring)."""
         try:
-            key = self._key('transit', scene, q_a, q_b)
-            return self._remembered(key, lambda: Stpik.transit(self, q_a, q_b, scene, deadline))
+            key = self._key('transit', q_a, q_b)
+            return self._remembered(
+                key, scene, lambda: Stpik.transit(self, q_a, q_b, scene, deadline)
+            )
         except PlanningTimeout:
             raise
         except MotionPlannerError as err:
@@ -169,8 +242,9 @@ class RobustStpik(Stpik):
                 or (self.config.rrt_transit_s <= 0.0)
             ):
                 raise
-            path = self.rrt(
-                np.asarray(q_a, dtype=float), np.asarray(q_b, dtype=float), scene, deadline
+            a, b = np.asarray(q_a, dtype=float), np.asarray(q_b, dtype=float)
+            path = self._remembered(
+                self._key('rrt', a, b), scene, lambda: self.rrt(a, b, scene, deadline)
             )
             if path is None:
                 raise err from None

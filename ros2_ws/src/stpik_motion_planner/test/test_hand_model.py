@@ -148,11 +148,14 @@ def test_grasp_keeps_the_palm_off_a_deep_box(hand, make_scenario, robot):
     )
     sampler = _sampler(hand, make_scenario, box)
     palm = {'palm': hand.at_pose['j2s7s300_link_7']}
+    spheres = {'palm': hand.at_pose_spheres['j2s7s300_link_7']}
     axis = grasp_rotation(yaw)[:, 2]
     at_axis = _grasp(0.55, 0.1, 0.07, yaw)
     backed = pin.SE3(at_axis.rotation, at_axis.translation + room * axis)
-    assert sampler._hits(palm, at_axis) == ['T']  # the EE on the axis: palm inside the box
-    assert sampler._hits(palm, backed) == []
+    assert sampler._hits(palm, spheres, at_axis) == [
+        'T'
+    ]  # the EE on the axis: palm inside the box
+    assert sampler._hits(palm, spheres, backed) == []
 
 
 def test_grasp_height_constants_bound_the_hand(hand):

@@ -77,3 +77,37 @@ def test_fallback_pass_reuses_the_plain_pass_answer(setup, robot):
         assert len(calls) == 2 + stpik.config.ik_restarts
     finally:
         type(stpik).__mro__[1].converge = original
+
+
+def test_results_are_reused_only_where_the_scene_queries_replay(setup, robot, make_cylinder):
+    """#28 replay memo: a far object added keeps the remembered solve (bit for bit the one
+    computed afresh); an object in the arm's way is a new computation."""
+    stpik, scene, scenario = setup
+    home = np.asarray(scenario.home, dtype=float)
+    target = pin.SE3(robot.ee_pose(home))
+    target.translation = target.translation + np.r_[0.05, 0.0, -0.05]
+    first = stpik.converge(home, target, scene)
+    hits = stpik.memo_hits
+    far = SceneWorld([*scenario.objects, make_cylinder('far', -0.6, -0.6)])
+    again = stpik.converge(home, target, far)
+    assert stpik.memo_hits == hits + 1
+    fresh = RobustStpik(robot, PlannerConfig()).converge(home, target, far)
+    assert np.array_equal(again, first) and np.array_equal(fresh, first)
+    near_point = robot.ee_pose(first).translation
+    near = SceneWorld([*scenario.objects, make_cylinder('near', *near_point[:2], h=0.8)])
+
+    def solve(planner: RobustStpik):
+        try:
+            return planner.converge(home, target, near)
+        except MotionPlannerError as err:
+            return str(err)
+
+    in_the_way = solve(stpik)
+    assert stpik.memo_hits == hits + 1  # computed again
+    expected = solve(RobustStpik(robot, PlannerConfig()))
+    assert type(in_the_way) is type(expected)
+    assert (
+        (in_the_way == expected)
+        if isinstance(expected, str)
+        else np.array_equal(in_the_way, expected)
+    )
