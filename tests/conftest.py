@@ -1,7 +1,7 @@
 """Shared fixtures for cross-node tests: a private ROS domain, started nodes, an rclpy client node.
 
 Every test that starts nodes gets its own ``ROS_DOMAIN_ID`` (file-locked counter in
-``scripts/orchestration.py``) and localhost-only discovery, so tests can run in parallel.
+:mod:`qtree_node_support.orchestration`) and localhost-only discovery: tests run in parallel.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from orchestration import NodeProcess, allocate_domain_id, start_node, stop_all
+from qtree_node_support.orchestration import NodeProcess, allocate_domain_id, start_node, stop_all
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 LOADED_EXECUTION_TIMEOUT_S = 240.0  # motion_planner_node's execution_timeout_s unless set [s]

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 import pytest
 import yaml
-from orchestration import allocate_domain_id
+from qtree_node_support.orchestration import allocate_domain_id
 
 pytestmark = pytest.mark.timeout(300)
 

@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
-from orchestration import node_command
+from qtree_node_support.orchestration import node_command
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 DEMO = REPO_ROOT / 'scripts' / 'run_demo.py'
@@ -130,8 +130,8 @@ def test_ctrl_c_right_after_rclpy_init_is_an_interrupt(monkeypatch) -> None:
     handler shuts the context down) ended the demo with RCLError and exit code 1, not 130."""
     import argparse
 
-    import demo_goal
     import rclpy
+    from qtree_benchmarks import demo_goal
 
     real_init = rclpy.init
 

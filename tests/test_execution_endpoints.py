@@ -13,7 +13,7 @@ import pytest
 from jaco2_description.model import ARM_JOINTS, HOME
 from qtree_msgs.msg import Scene
 from qtree_msgs.srv import AttachObject, RelocateObject
-from qtree_scene.conversions import scene_msg
+from qtree_scene.message import scene_msg
 from qtree_scene.scenario import load_scenario
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState

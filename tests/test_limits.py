@@ -18,8 +18,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
-from load_test import rss_mb  # one RSS reader for the load script and these tests
-from orchestration import NodeProcess
+from qtree_benchmarks.cli.load_test import (
+    rss_mb,  # one RSS reader for the load script and these tests
+)
+from qtree_node_support.orchestration import NodeProcess
 
 if TYPE_CHECKING:
     from conftest import ClientGraph

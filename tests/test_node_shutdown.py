@@ -9,7 +9,7 @@ import signal
 from pathlib import Path
 
 import pytest
-from soaking import stop_graph_once
+from qtree_benchmarks.soak import stop_graph_once
 
 pytestmark = pytest.mark.timeout(300)
 

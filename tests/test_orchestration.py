@@ -1,4 +1,4 @@
-"""scripts/orchestration.py without ROS: a node's log stays readable after it was stopped."""
+"""qtree_node_support.orchestration without ROS: a stopped node's log stays readable."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from orchestration import NodeProcess
+from qtree_node_support.orchestration import NodeProcess
 
 
 def _process(tmp_path: Path, code: str) -> NodeProcess:

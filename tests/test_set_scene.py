@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 from qtree_msgs.msg import ObjectState, Scene
 from qtree_msgs.srv import RelocateObject, SetScene
-from qtree_scene.conversions import scene_msg
+from qtree_scene.message import scene_msg
 from qtree_scene.scenario import load_scenario
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState

@@ -5,7 +5,12 @@ from __future__ import annotations
 import subprocess
 
 import pytest
-from soaking import FRESH_CLONE_COMMAND, clean_environment, fresh_clone, summary_failures
+from qtree_benchmarks.soak import (
+    FRESH_CLONE_COMMAND,
+    clean_environment,
+    fresh_clone,
+    summary_failures,
+)
 
 OUTPUT = """\
 ........F...E
@@ -27,7 +32,7 @@ def test_summary_failures_names_every_failed_and_erroring_test() -> None:
 
 
 def test_the_command_is_the_readmes_and_the_shell_is_clean(monkeypatch) -> None:
-    from soaking import REPO_ROOT
+    from qtree_benchmarks.soak import REPO_ROOT
 
     assert (
         '```bash\n./qtree demo\n' + ' '.join(FRESH_CLONE_COMMAND) + '\n```'
@@ -41,7 +46,7 @@ def test_the_command_is_the_readmes_and_the_shell_is_clean(monkeypatch) -> None:
 
 
 def test_fresh_clone_has_main_and_shared_beside_it(tmp_path) -> None:
-    from soaking import REPO_ROOT
+    from qtree_benchmarks.soak import REPO_ROOT
 
     head = subprocess.run(['git', 'rev-parse', 'main'], cwd=REPO_ROOT, capture_output=True)
     if head.returncode != 0:

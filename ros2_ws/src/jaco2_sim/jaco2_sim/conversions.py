@@ -12,7 +12,7 @@ import rclpy.serialization
 from builtin_interfaces.msg import Time
 from jaco2_description.model import ARM_JOINTS, FINGER_JOINTS
 from qtree_msgs.msg import Scene
-from qtree_scene import conversions as scene_conversions
+from qtree_scene import message as scene_message
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
@@ -48,7 +48,7 @@ def scene_msg(world: World, stamp: Time) -> Scene:
         q = pin.Quaternion(state.pose.rotation)
         poses[object_id] = (state.pose.translation, (q.x, q.y, q.z, q.w))
     statuses = {object_id: state.status for object_id, state in world.objects.items()}
-    msg = scene_conversions.scene_msg(world.scenario, poses, statuses, world.attached_id or '')
+    msg = scene_message.scene_msg(world.scenario, poses, statuses, world.attached_id or '')
     msg.header.stamp = stamp
     return msg
 

@@ -14,18 +14,12 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile
 
 from jaco2_sim.conversions import parameter_descriptor
 from jaco2_sim.disturbances import PARAMETER_FIELDS
 from jaco2_sim.simulation import EXPECTED_ERRORS, Simulation
 
-LATCHED_QOS = QoSProfile(  # /scene and /robot_description
-    history=HistoryPolicy.KEEP_LAST,
-    depth=1,
-    reliability=ReliabilityPolicy.RELIABLE,
-    durability=DurabilityPolicy.TRANSIENT_LOCAL,
-)
 STATE_QOS = QoSProfile(depth=10)  # /joint_states: reliable, volatile
 TRAJECTORY_QOS = QoSProfile(depth=10)  # /joint_trajectory
 MAX_TRAJECTORY_POINTS_CAP = 100_000  # upper bound of max_trajectory_points (~0.9 s blocked)

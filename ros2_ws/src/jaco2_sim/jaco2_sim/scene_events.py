@@ -26,7 +26,6 @@ is no longer in the clutter when it fires (e.g. being carried) is skipped with a
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -35,6 +34,7 @@ from typing import Any
 import numpy as np
 import yaml
 from qtree_scene.exceptions import ScenarioError
+from qtree_scene.fields import brief, number
 from qtree_scene.scenario import validate_scenario
 from qtree_scene.scene import ObjectSpec, Scenario
 
@@ -109,7 +109,7 @@ def parse_events(text: str, scenario: Scenario) -> tuple[SceneEvent, ...]:
     except yaml.YAMLError as err:
         raise SceneEventError(f'scene_events: not YAML/JSON: {err}') from None
     if not isinstance(data, list):
-        raise SceneEventError(f'scene_events: a list of events expected, got {_brief(data)}')
+        raise SceneEventError(f'scene_events: a list of events expected, got {brief(data)}')
     if len(data) > MAX_EVENTS:
         raise SceneEventError(f'scene_events: at most {MAX_EVENTS} events, got {len(data)}')
     events, objects = [], {o.id: o for o in scenario.objects}
@@ -130,10 +130,10 @@ def _parse_event(index: int, entry: Any, objects: dict[str, ObjectSpec]) -> Scen
         raise SceneEventError(f'{name}.{key}: {problem}')
 
     if not isinstance(entry, dict):
-        raise SceneEventError(f'{name}: a mapping expected, got {_brief(entry)}')
+        raise SceneEventError(f'{name}: a mapping expected, got {brief(entry)}')
     kind = entry.get('kind')
     if kind not in KINDS:
-        fail('kind', f'must be one of {", ".join(KINDS)}, got {_brief(kind)}')
+        fail('kind', f'must be one of {", ".join(KINDS)}, got {brief(kind)}')
     allowed = {'kind', 'object'} | KEYS[kind] | (TRIGGERS if kind != 'grasp_failure' else set())
     for key in entry:
         if key not in allowed:
@@ -141,7 +141,7 @@ def _parse_event(index: int, entry: Any, objects: dict[str, ObjectSpec]) -> Scen
             fail(str(key), f'unknown key for a {kind} event (allowed: {names})')
     object_id = entry.get('object')
     if not isinstance(object_id, str) or not object_id:
-        fail('object', f'a non-empty id expected, got {_brief(object_id)}')
+        fail('object', f'a non-empty id expected, got {brief(object_id)}')
     known = object_id in objects
     if kind == 'add' and known:
         fail('object', f'{object_id!r} is already in the scene')
@@ -153,7 +153,7 @@ def _parse_event(index: int, entry: Any, objects: dict[str, ObjectSpec]) -> Scen
     if kind == 'grasp_failure':
         attempt = entry.get('attempt', 1)
         if isinstance(attempt, bool) or not isinstance(attempt, int) or attempt < 1:
-            fail('attempt', f'a positive integer expected, got {_brief(attempt)}')
+            fail('attempt', f'a positive integer expected, got {brief(attempt)}')
         return SceneEvent(index, kind, object_id, attempt=attempt)
     fields.update(_trigger(entry, object_id, objects, fail))
     if kind in ('move', 'add'):
@@ -161,7 +161,7 @@ def _parse_event(index: int, entry: Any, objects: dict[str, ObjectSpec]) -> Scen
             fail('xy', 'missing (the new centre [x, y] on the table [m])')
         fields['xy'] = tuple(_numbers(entry['xy'], 2, 'xy', fail))
         if 'yaw' in entry:
-            fields['yaw'] = _number(entry['yaw'], 'yaw', fail)
+            fields['yaw'] = number(entry['yaw'], 'yaw', fail)
     if kind == 'add':
         fields['spec'] = _added_spec(object_id, entry, fields, fail)
     return SceneEvent(index, kind, object_id, **fields)
@@ -176,16 +176,16 @@ def _trigger(
     if has_time:
         if 'of' in entry:
             fail('of', 'only with hand_within_m')
-        at_s = _number(entry['at_s'], 'at_s', fail)
+        at_s = number(entry['at_s'], 'at_s', fail)
         if not 0.0 <= at_s <= MAX_AT_S:
             fail('at_s', f'must be in [0, {MAX_AT_S:g}] s, got {at_s}')
         return {'at_s': at_s}
-    distance = _number(entry['hand_within_m'], 'hand_within_m', fail)
+    distance = number(entry['hand_within_m'], 'hand_within_m', fail)
     if not 0.0 < distance <= MAX_HAND_DISTANCE_M:
         fail('hand_within_m', f'must be in (0, {MAX_HAND_DISTANCE_M}] m, got {distance}')
     near = entry.get('of', object_id)
     if not isinstance(near, str) or (near not in objects and near != object_id):
-        fail('of', f'unknown object {_brief(near)}')
+        fail('of', f'unknown object {brief(near)}')
     return {'hand_within_m': distance, 'near': near}
 
 
@@ -196,14 +196,14 @@ def _added_spec(
     x, y = fields['xy']
     yaw = fields.get('yaw') or 0.0
     if shape == 'cylinder':
-        radius = _number(entry.get('radius'), 'radius', fail, positive=True)
-        height = _number(entry.get('height'), 'height', fail, positive=True)
+        radius = number(entry.get('radius'), 'radius', fail, positive=True)
+        height = number(entry.get('height'), 'height', fail, positive=True)
         centre = (x, y, height / 2)
         return ObjectSpec(object_id, 'obstacle', 'cylinder', centre, yaw, radius, height)
     if shape == 'box':
         size = tuple(_numbers(entry.get('size'), 3, 'size', fail, positive=True))
         return ObjectSpec(object_id, 'obstacle', 'box', (x, y, size[2] / 2), yaw, size=size)
-    fail('shape', f"must be 'cylinder' or 'box', got {_brief(shape)}")
+    fail('shape', f"must be 'cylinder' or 'box', got {brief(shape)}")
     raise AssertionError  # unreachable: fail raises
 
 
@@ -302,24 +302,9 @@ class SceneEvents:
         return None
 
 
-def _number(value: Any, key: str, fail: Callable[..., None], positive: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        fail(key, f'a number expected, got {_brief(value)}')
-    if not math.isfinite(value):
-        fail(key, f'must be finite, got {value}')
-    if positive and value <= 0:
-        fail(key, f'must be > 0, got {value}')
-    return float(value)
-
-
 def _numbers(
     value: Any, n: int, key: str, fail: Callable[..., None], positive: bool = False
 ) -> list[float]:
     if not isinstance(value, (list, tuple)) or len(value) != n:
-        fail(key, f'{n} numbers expected, got {_brief(value)}')
-    return [_number(v, key, fail, positive) for v in value]
-
-
-def _brief(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + '...'
+        fail(key, f'{n} numbers expected, got {brief(value)}')
+    return [number(v, key, fail, positive) for v in value]

@@ -11,7 +11,7 @@ from jaco2_description.model import urdf_text
 from qtree_msgs.msg import Scene
 from qtree_msgs.srv import AttachObject, ResetScene, SetScene
 from qtree_node_support.lifecycle import run_node
-from qtree_node_support.qos import SERVICE_QOS
+from qtree_node_support.qos import LATCHED_QOS, SERVICE_QOS
 from qtree_node_support.text import quote
 from qtree_scene.message import parse_scene_msg
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
@@ -45,8 +45,8 @@ class Jaco2SimNode(Node):
         self.add_on_set_parameters_callback(lambda ps: api.check_parameters(self, self.core, ps))
         self.add_post_set_parameters_callback(self._apply_parameters)
         self.state_pub = self.create_publisher(JointState, '/joint_states', api.STATE_QOS)
-        self.scene_pub = self.create_publisher(Scene, '/scene', api.LATCHED_QOS)
-        self.urdf_pub = self.create_publisher(String, '/robot_description', api.LATCHED_QOS)
+        self.scene_pub = self.create_publisher(Scene, '/scene', LATCHED_QOS)
+        self.urdf_pub = self.create_publisher(String, '/robot_description', LATCHED_QOS)
         # motion on its own thread: services and parameters (scene loading) never stop it (#18)
         self._motion = MutuallyExclusiveCallbackGroup()
         qos, group = api.TRAJECTORY_QOS, {'callback_group': self._motion}

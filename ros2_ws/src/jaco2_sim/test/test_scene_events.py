@@ -65,6 +65,7 @@ def test_every_kind_parses_with_its_trigger(s1) -> None:
         ({'kind': 'move', 'object': 'table', 'xy': [0.5, 0.3], 'at_s': 1}, '[0].object'),
         ({'kind': 'move', 'object': 'O1', 'xy': [0.5], 'at_s': 1}, '[0].xy'),
         ({'kind': 'move', 'object': 'O1', 'xy': [0.5, float('nan')], 'at_s': 1}, '[0].xy'),
+        ({'kind': 'move', 'object': 'O1', 'xy': [10**400, 0.3], 'at_s': 1}, '[0].xy'),
         ({'kind': 'move', 'object': 'O1', 'at_s': 1}, '[0].xy'),
         ({'kind': 'move', 'object': 'O1', 'xy': [0.5, 0.3]}, '[0].at_s'),
         ({'kind': 'move', 'object': 'O1', 'xy': [0.5, 0.3], 'at_s': -1}, '[0].at_s'),

@@ -20,7 +20,7 @@ spinning 10 s after its SIGINT (stacks dumped: the main thread waiting in
 ``wait_for_ready_callbacks``), killed with SIGKILL.
 
 Two guards against a stop that hangs: ``SIGUSR1`` dumps every thread's stack to stderr (the
-node's log; ``scripts/orchestration.py`` sends it before a SIGKILL), and once the node is
+node's log; :mod:`.orchestration` sends it before a SIGKILL), and once the node is
 cleaned up (its data saved) an exit watchdog (daemon thread) ends the process with the run's
 code if the interpreter has not exited within ``EXECUTOR_SHUTDOWN_S + EXIT_WATCHDOG_S`` (a
 callback thread that never returns would otherwise keep it alive: seen once in 10 soak runs,

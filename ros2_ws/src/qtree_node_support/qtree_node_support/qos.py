@@ -19,6 +19,12 @@ SERVICE_QOS = QoSProfile(  # requests and replies: never dropped by the history
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.VOLATILE,  # a request is for the server running now
 )
+LATCHED_QOS = QoSProfile(  # /scene, /qtree, /robot_description: a late joiner gets the last one
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
 
 
 def action_server_qos() -> dict[str, Any]:

@@ -6,7 +6,7 @@ from types import SimpleNamespace
 
 from qtree_msgs.msg import PlanningEvent, ReplanEvent
 from qtree_recorder.world_changes import REPLAN_TOPIC, WorldChanges, replan_line, timeline
-from qtree_scene.conversions import scene_msg
+from qtree_scene.message import scene_msg
 from qtree_scene.scenario import load_scenario
 
 S1 = load_scenario('s1')

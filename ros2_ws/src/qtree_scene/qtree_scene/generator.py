@@ -27,7 +27,7 @@ gaps; ``density`` and the shape ranges do not apply to them):
   layout are not retrievable (``benchmarks/results/clutter_solvable.md``).
 
 Whether the target can actually be retrieved by the motion planner is checked outside this
-package (``qtree_task_planner.clutter.generate_retrievable``); the 2-D model is a necessary
+package (``qtree_benchmarks.task.clutter.generate_retrievable``); the 2-D model is a necessary
 condition for the planner's corridor test, not a sufficient one (IK, joint limits, arm links).
 """
 

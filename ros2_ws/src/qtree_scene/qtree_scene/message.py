@@ -1,4 +1,8 @@
-"""``qtree_msgs/msg/Scene`` ↔ scene types, duck-typed (attribute access, no ROS import).
+"""``qtree_msgs/msg/Scene`` ↔ scene types: the one home of both directions.
+
+Reading is duck-typed (attribute access, no ROS import); writing (:func:`scene_msg`, the
+simulator's ``/scene`` and the SetScene requests of tests and clients) imports the message types
+when it is called.
 
 One converter for every node that reads a scene message: the simulator's ``SetScene`` (strict,
 :func:`parse_scene_msg`: as strict as a scenario YAML file, the same validator and messages) and
@@ -16,22 +20,20 @@ Every error is a :class:`~qtree_scene.exceptions.ScenarioError` whose field is t
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from jaco2_description.model import BASE_LINK, HOME
 
 from qtree_scene.exceptions import ScenarioError
+from qtree_scene.fields import brief, failer, number
 from qtree_scene.scenario import (
     MAX_OBJECTS,
     TABLE_ID,
-    _brief,
-    _failer,
-    _number,
     check_object_count,
     validate_scenario,
 )
-from qtree_scene.scene import ObjectSpec, Role, Scenario, Shape
+from qtree_scene.scene import ObjectSpec, Role, Scenario, Shape, Status
 
 # qtree_msgs/msg/ObjectState and shape_msgs/msg/SolidPrimitive constants (test_message.py checks
 # them against the generated message classes).
@@ -82,11 +84,11 @@ def scenario_from_msg(
         ScenarioError: bad frame, more than :data:`MAX_OBJECTS` objects, or a bad object field
             (id, role, status, primitive type, dimensions, non-finite or non-unit pose, ...).
     """
-    fail = _failer(source)
+    fail = failer(source)
     frame = getattr(msg.header, 'frame_id', '')
     if frame not in ('', BASE_LINK):
         fail(
-            'header.frame_id', f'must be {BASE_LINK!r} (the robot base frame), got {_brief(frame)}'
+            'header.frame_id', f'must be {BASE_LINK!r} (the robot base frame), got {brief(frame)}'
         )
     check_object_count(len(msg.objects), fail)
     objects = []
@@ -113,11 +115,11 @@ def parse_scene_msg(msg: Any, home: tuple[float, ...] = tuple(HOME)) -> Scenario
     Raises:
         ScenarioError: the first problem, prefixed ``SetScene:``, naming the field and object.
     """
-    fail = _failer(SOURCE)
+    fail = failer(SOURCE)
     if not isinstance(msg.scenario_name, str) or not msg.scenario_name.strip():
-        fail('scenario_name', f'must be a non-empty string, got {_brief(msg.scenario_name)}')
+        fail('scenario_name', f'must be a non-empty string, got {brief(msg.scenario_name)}')
     if msg.attached_id:
-        fail('attached_id', f'must be empty in a new scene, got {_brief(msg.attached_id)}')
+        fail('attached_id', f'must be empty in a new scene, got {brief(msg.attached_id)}')
     scenario = scenario_from_msg(msg, home=home, source=SOURCE)
     _identity(msg.robot_base, 'robot_base', 'the scene frame is the robot base frame', fail)
     _identity(msg.drop_zone, 'drop_zone', 'the drop zone is an axis-aligned box', fail)
@@ -145,7 +147,7 @@ def parse_scene_msg(msg: Any, home: tuple[float, ...] = tuple(HOME)) -> Scenario
 def _object(obj: Any, field: str, fail: Callable[..., Any]) -> ObjectSpec:
     object_id = obj.id
     if not isinstance(object_id, str) or not object_id.strip():
-        fail(f'{field}.id', f'must be a non-empty string, got {_brief(object_id)}')
+        fail(f'{field}.id', f'must be a non-empty string, got {brief(object_id)}')
     if len(object_id) > MAX_ID_CHARS:
         fail(f'{field}.id', f'{len(object_id)} characters, at most {MAX_ID_CHARS}')
     name = repr(object_id)
@@ -159,7 +161,7 @@ def _object(obj: Any, field: str, fail: Callable[..., Any]) -> ObjectSpec:
     shape = _shape(obj.shape, f'{field}.shape', name, fail)
     dims = list(obj.shape.dimensions)
     sizes = [
-        _number(v, f'{field}.shape.dimensions[{k}]', _named(name, axis, fail), positive=True)
+        number(v, f'{field}.shape.dimensions[{k}]', _named(name, axis, fail), positive=True)
         for k, (v, axis) in enumerate(zip(dims, DIMENSION_NAMES[shape], strict=True))
     ]
     position = _point(obj.pose.position, f'{field}.pose.position', _named(name, '', fail))
@@ -206,15 +208,15 @@ def _named(name: str, what: str, fail: Callable[..., Any]) -> Callable[..., Any]
 
 
 def _point(p: Any, field: str, fail: Callable[..., Any]) -> tuple[float, float, float]:
-    return tuple(_number(getattr(p, a), f'{field}.{a}', fail) for a in 'xyz')
+    return tuple(number(getattr(p, a), f'{field}.{a}', fail) for a in 'xyz')
 
 
 def _positive_xyz(v: Any, field: str, fail: Callable[..., Any]) -> tuple[float, float, float]:
-    return tuple(_number(getattr(v, a), f'{field}.{a}', fail, positive=True) for a in 'xyz')
+    return tuple(number(getattr(v, a), f'{field}.{a}', fail, positive=True) for a in 'xyz')
 
 
 def _quaternion(q: Any, field: str, name: str, fail: Callable[..., Any]) -> tuple[float, ...]:
-    x, y, z, w = (_number(getattr(q, a), f'{field}.{a}', _named(name, '', fail)) for a in 'xyzw')
+    x, y, z, w = (number(getattr(q, a), f'{field}.{a}', _named(name, '', fail)) for a in 'xyzw')
     norm = math.sqrt(x * x + y * y + z * z + w * w)
     if abs(norm - 1.0) > UNIT_TOLERANCE:
         fail(field, f'{name}: not a unit quaternion (norm {norm:.4g})')
@@ -250,3 +252,57 @@ __all__ = [
     'scenario_from_msg',
     'yaw_quaternion',
 ]
+
+
+PoseTuple = tuple[Sequence[float], Sequence[float]]  # position (3,) [m], quaternion xyzw (4,)
+
+
+def pose_msg(position: Sequence[float], quaternion: Sequence[float] = (0, 0, 0, 1)) -> Any:
+    """geometry_msgs/Pose of a position [m] and a quaternion (x, y, z, w)."""
+    from geometry_msgs.msg import Pose  # lazy: the readers above need no message package
+
+    msg = Pose()
+    msg.position.x, msg.position.y, msg.position.z = (float(v) for v in position)
+    o = msg.orientation
+    o.x, o.y, o.z, o.w = (float(v) for v in quaternion)
+    return msg
+
+
+def scene_msg(
+    scenario: Scenario,
+    poses: Mapping[str, PoseTuple] | None = None,
+    statuses: Mapping[str, Status] | None = None,
+    attached_id: str = '',
+) -> Any:
+    """The Scene message of ``scenario`` (header stamp left at zero for the caller).
+
+    Args:
+        scenario: objects (the table a STATIC box), drop zone.
+        poses: current pose of some objects by id; the others are at their scenario pose.
+        statuses: status of some objects by id; the others are ``'in_clutter'``.
+        attached_id: id of the object held by the hand, '' when none.
+    """
+    from geometry_msgs.msg import Vector3
+    from qtree_msgs.msg import ObjectState, Scene
+    from shape_msgs.msg import SolidPrimitive
+
+    poses, statuses = poses or {}, statuses or {}
+    msg = Scene(scenario_name=scenario.name, attached_id=attached_id)
+    msg.header.frame_id = BASE_LINK
+    for spec in scenario.objects:
+        kind, dimensions = primitive_of(spec)
+        position, quaternion = poses.get(spec.id, (spec.position, yaw_quaternion(spec.yaw)))
+        msg.objects.append(
+            ObjectState(
+                id=spec.id,
+                role=ROLE_CODES[spec.role],
+                shape=SolidPrimitive(type=kind, dimensions=dimensions),
+                pose=pose_msg(position, quaternion),
+                status=STATUS_CODES[statuses.get(spec.id, 'in_clutter')],
+            )
+        )
+    msg.drop_zone = pose_msg(scenario.drop_zone_center)
+    x, y, z = (float(v) for v in scenario.drop_zone_size)
+    msg.drop_zone_size = Vector3(x=x, y=y, z=z)
+    msg.robot_base = pose_msg((0.0, 0.0, 0.0))
+    return msg

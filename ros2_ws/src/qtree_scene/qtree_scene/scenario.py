@@ -37,9 +37,7 @@ quoted in the field (``objects[0]['']``).
 from __future__ import annotations
 
 import math
-import numbers
 import pathlib
-import reprlib
 from collections.abc import Callable
 from typing import Any
 
@@ -47,6 +45,7 @@ import yaml
 from jaco2_description.model import HOME, arm_limits
 
 from qtree_scene.exceptions import ScenarioError
+from qtree_scene.fields import brief, failer, number
 from qtree_scene.footprint import Footprint, footprint_of, overlap
 from qtree_scene.scene import ObjectSpec, Scenario
 
@@ -59,11 +58,8 @@ _BOX = {'center_xy', 'size'}
 _OBJECT = {'id', 'role', 'shape', 'xy', 'radius', 'height', 'size', 'yaw'}
 _SHAPE_KEYS = {'cylinder': {'radius', 'height'}, 'box': {'size'}}
 _ROLES = ('target', 'obstacle', 'static')
-_MAX_SHOWN = 60  # characters of a bad value quoted in an error message
 MAX_SCENARIO_BYTES = 1_000_000  # largest scenario file (s3: 3 kB; 200 objects: ~40 kB) [bytes]
 MAX_NAME_CHARS = 256  # longest scenario name or object id (= the motion planner's id limit)
-_REPR = reprlib.Repr()
-_REPR.maxlevel, _REPR.maxstring, _REPR.maxother = 3, _MAX_SHOWN, _MAX_SHOWN
 
 
 def list_scenarios() -> list[str]:
@@ -78,7 +74,7 @@ def resolve_scenario(name_or_path: str) -> pathlib.Path:
         ScenarioError: not a string, or neither an installed name nor an existing file.
     """
     if not isinstance(name_or_path, str):
-        raise ScenarioError(_brief(name_or_path), '', 'expected a scenario name or path string')
+        raise ScenarioError(brief(name_or_path), '', 'expected a scenario name or path string')
     if name_or_path in list_scenarios():
         return SCENARIO_DIR / f'{name_or_path}.yaml'
     try:
@@ -121,7 +117,7 @@ def parse_scenario(data: Any, source: str = '') -> Scenario:
     Raises:
         ScenarioError: schema or geometry violation.
     """
-    fail = _failer(source)
+    fail = failer(source)
     if not isinstance(data, dict):
         fail('', f'top level must be a mapping, got {type(data).__name__}')
     _check_keys(data, _TOP, {'name', 'table', 'drop_zone', 'objects'}, '', fail)
@@ -138,7 +134,7 @@ def parse_scenario(data: Any, source: str = '') -> Scenario:
     )
     zone_size = _vector(data['drop_zone']['size'], 3, 'drop_zone.size', fail, positive=True)
     home = _vector(data.get('home', HOME.tolist()), 7, 'home', fail)
-    keepout = _number(
+    keepout = number(
         data.get('robot_keepout_radius', DEFAULT_KEEPOUT), 'robot_keepout_radius', fail
     )
     if not isinstance(data['objects'], list) or not data['objects']:
@@ -193,7 +189,7 @@ def validate_scenario(
     Raises:
         ScenarioError: see the module docstring for the rules.
     """
-    fail = _failer(scenario.source or scenario.name if source is None else source)
+    fail = failer(scenario.source or scenario.name if source is None else source)
     check_object_count(len(scenario.objects), fail)
     movable = [(i, o) for i, o in enumerate(scenario.objects) if o.id != TABLE_ID]
     seen: dict[str, int] = {}
@@ -273,10 +269,10 @@ def _parse_object(data: Any, field: str, fail: Callable[..., Any]) -> ObjectSpec
     for key in sorted(_SHAPE_KEYS[shape] - set(data)):
         fail(f'{field}.{key}', f'missing (required for a {shape})')
     xy = _vector(data['xy'], 2, f'{field}.xy', fail)
-    yaw = _number(data.get('yaw', 0.0), f'{field}.yaw', fail)
+    yaw = number(data.get('yaw', 0.0), f'{field}.yaw', fail)
     if shape == 'cylinder':
-        radius = _number(data['radius'], f'{field}.radius', fail, positive=True)
-        height = _number(data['height'], f'{field}.height', fail, positive=True)
+        radius = number(data['radius'], f'{field}.radius', fail, positive=True)
+        height = number(data['height'], f'{field}.height', fail, positive=True)
         position = (xy[0], xy[1], height / 2)
         return ObjectSpec(object_id, role, 'cylinder', position, yaw, radius=radius, height=height)
     size = _vector(data['size'], 3, f'{field}.size', fail, positive=True)
@@ -284,19 +280,12 @@ def _parse_object(data: Any, field: str, fail: Callable[..., Any]) -> ObjectSpec
     return ObjectSpec(object_id, role, 'box', position, yaw, size=tuple(size))
 
 
-def _failer(source: str) -> Callable[..., Any]:
-    def fail(field: str, problem: str) -> None:
-        raise ScenarioError(source, field, problem)
-
-    return fail
-
-
 def _check_keys(
     data: dict, allowed: set, required: set, prefix: str, fail: Callable[..., Any]
 ) -> None:
     for key in data:
         if key not in allowed:
-            problem = f'unknown key {_brief(key)} (allowed: {", ".join(sorted(allowed))})'
+            problem = f'unknown key {brief(key)} (allowed: {", ".join(sorted(allowed))})'
             fail(_key_field(prefix, key), problem)
     for key in sorted(required - set(data)):
         fail(f'{prefix}{key}', 'missing')
@@ -313,61 +302,36 @@ def _key_field(prefix: str, key: Any) -> str:
     """Field of ``key`` under ``prefix``: ``objects[0].mass``, or quoted: ``objects[0]['']``."""
     if isinstance(key, str) and key.isidentifier():
         return f'{prefix}{key}'
-    return f'{prefix.removesuffix(".")}[{_brief(key)}]'
-
-
-def _brief(value: Any) -> str:
-    """``repr(value)``, cut to :data:`_MAX_SHOWN` characters (a bad value may be huge)."""
-    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**_MAX_SHOWN:
-        return f'an integer of {value.bit_length()} bits'  # str() fails beyond 4300 digits
-    try:
-        text = _REPR.repr(value)  # depth and length limited: fast on huge or deep values
-    except (ValueError, RecursionError):  # e.g. an int of > 4300 digits inside a list
-        return f'a {type(value).__name__}'
-    return text if len(text) <= _MAX_SHOWN else f'{text[: _MAX_SHOWN - 3]}...'
-
-
-def _number(value: Any, field: str, fail: Callable[..., Any], positive: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        fail(field, f'expected a number, got {type(value).__name__} {_brief(value)}')
-    try:
-        number = float(value)
-    except (OverflowError, TypeError, ValueError):
-        fail(field, f'{_brief(value)} is too large for a float')
-    if not math.isfinite(number):
-        fail(field, f'must be finite, got {number}')
-    if positive and number <= 0:
-        fail(field, f'must be > 0, got {number}')
-    return number
+    return f'{prefix.removesuffix(".")}[{brief(key)}]'
 
 
 def _vector(
     value: Any, n: int, field: str, fail: Callable[..., Any], positive: bool = False
 ) -> list[float]:
     if not isinstance(value, (list, tuple)):
-        fail(field, f'must be a list of {n} numbers, got {type(value).__name__} {_brief(value)}')
+        fail(field, f'must be a list of {n} numbers, got {type(value).__name__} {brief(value)}')
     if len(value) != n:
         fail(field, f'must be a list of {n} numbers, got {len(value)} items')
-    return [_number(v, f'{field}[{k}]', fail, positive) for k, v in enumerate(value)]
+    return [number(v, f'{field}[{k}]', fail, positive) for k, v in enumerate(value)]
 
 
 def _text(value: Any, field: str, fail: Callable[..., Any]) -> str:
     if not isinstance(value, str):
-        fail(field, f'expected a string, got {type(value).__name__} {_brief(value)}')
+        fail(field, f'expected a string, got {type(value).__name__} {brief(value)}')
     return value
 
 
 def _string(value: Any, field: str, fail: Callable[..., Any]) -> str:
     if not _text(value, field, fail).strip():
-        fail(field, f'must be a non-empty string, got {_brief(value)}')
+        fail(field, f'must be a non-empty string, got {brief(value)}')
     if len(value) > MAX_NAME_CHARS:  # names and ids are echoed in messages and /scene
-        fail(field, f'at most {MAX_NAME_CHARS} characters, got {len(value)}: {_brief(value)}')
+        fail(field, f'at most {MAX_NAME_CHARS} characters, got {len(value)}: {brief(value)}')
     return value
 
 
 def _choice(value: Any, choices: tuple[str, ...], field: str, fail: Callable[..., Any]) -> str:
     if _text(value, field, fail) not in choices:
-        fail(field, f'must be one of {", ".join(choices)}, got {_brief(value)}')
+        fail(field, f'must be one of {", ".join(choices)}, got {brief(value)}')
     return value
 
 

@@ -11,7 +11,7 @@ from qtree_scene.changes import (
     scene_changes,
     standing_objects,
 )
-from qtree_scene.conversions import scene_msg
+from qtree_scene.message import scene_msg
 from qtree_scene.scenario import load_scenario
 
 

@@ -1,4 +1,4 @@
-"""Scene messages ↔ scene types (qtree_scene.message / .conversions): round trips, bad input."""
+"""Scene messages ↔ scene types (qtree_scene.message, both directions): round trips, bad input."""
 
 from __future__ import annotations
 
@@ -11,10 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from qtree_msgs.msg import ObjectState
 from qtree_scene import message as scene_message
-from qtree_scene.conversions import scene_msg
 from qtree_scene.exceptions import ScenarioError
 from qtree_scene.generator import generate_clutter
-from qtree_scene.message import MAX_OBJECTS, parse_scene_msg, scenario_from_msg
+from qtree_scene.message import MAX_OBJECTS, parse_scene_msg, scenario_from_msg, scene_msg
 from qtree_scene.scenario import load_scenario, parse_scenario, scenario_to_dict
 from shape_msgs.msg import SolidPrimitive
 

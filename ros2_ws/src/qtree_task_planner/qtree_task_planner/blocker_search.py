@@ -203,7 +203,10 @@ class BlockerSearchResult:
         return bool(self.sequence)
 
 
-class _BudgetExceededError(Exception):
+class _SearchStop(Exception):  # noqa: N818 (a control-flow signal, not an error)
+    """The search's own budget (runs, time, expansions) is used up or it was cancelled: unwinds
+    to :func:`blocker_search`, which returns the incumbent. Never leaves this module."""
+
     def __init__(self, which: str) -> None:
         self.which = which
 
@@ -290,9 +293,9 @@ class BlockerSearch:
 
     def _check_budget(self) -> None:
         if self._runs() >= self.config.max_planner_runs:
-            raise _BudgetExceededError(BUDGET_RUNS)
+            raise _SearchStop(BUDGET_RUNS)
         if time.monotonic() - self._start > self.config.time_limit_s:
-            raise _BudgetExceededError(BUDGET_TIME)
+            raise _SearchStop(BUDGET_TIME)
         if self._cap is not None and self._runs() >= self._cap:
             raise _CompletionStopError
 
@@ -534,11 +537,11 @@ class BlockerSearch:
         def dfs(chosen: frozenset[str]) -> tuple[list[str] | None, bool]:
             self.expansions += 1
             if self.expansions > self.config.max_expansions:
-                raise _BudgetExceededError(BUDGET_EXPANSIONS)
+                raise _SearchStop(BUDGET_EXPANSIONS)
             if self.expansions % 256 == 0 and time.monotonic() - self._start > (
                 self.config.time_limit_s
             ):
-                raise _BudgetExceededError(BUDGET_TIME)
+                raise _SearchStop(BUDGET_TIME)
             order = self._closure(chosen)
             branch = self._branch(chosen, order)
             if branch is None:
@@ -589,7 +592,7 @@ class BlockerSearch:
 
     def _report(self, walked: tuple[str, ...], reached: bool) -> None:
         if self.on_candidate is not None and self.on_candidate(walked, reached) is False:
-            raise _BudgetExceededError(BUDGET_CANCELLED)
+            raise _SearchStop(BUDGET_CANCELLED)
 
     def _keep(self, sequence: tuple[str, ...]) -> None:
         """``sequence`` (every step answered feasible) becomes the incumbent if shorter."""
@@ -773,7 +776,7 @@ class BlockerSearch:
         self._guard = True
         try:
             return self._search()
-        except _BudgetExceededError as hit:
+        except _SearchStop as hit:
             return self._result(self.incumbent, STATUS_BUDGET, hit.which)
         finally:
             self._guard = False

@@ -68,3 +68,20 @@ class SearchLimitExceededError(QTreeError, RuntimeError):
     def __init__(self, limit: int) -> None:
         self.limit = limit
         super().__init__(f'exact search explored more than {limit} sets')
+
+
+class BudgetExceededError(OracleUnavailableError):
+    """A planner-run or wall-time budget is used up: the oracle answers no more questions.
+
+    An :class:`OracleUnavailableError`, so a trainer stops as it does when the planner is gone.
+
+    Attributes:
+        which: the budget, e.g. ``'planner_runs'`` or ``'time'``.
+    """
+
+    def __init__(self, which: str, detail: str = '') -> None:
+        super().__init__('?', (), detail or f'{which} budget used up')
+        self.which = which
+
+    def __str__(self) -> str:
+        return self.detail

@@ -29,6 +29,8 @@ import dataclasses
 from collections.abc import Iterable, Sequence
 from typing import Any
 
+from stpik_motion_planner.result import ReasonFamily, reason_family
+
 from qtree_task_planner.oracle import FeasibilityAnswer
 
 SCENE_CHANGED, GRASP_FAILED = 304, 305  # RelocateObject.Response reason codes (#32)
@@ -51,7 +53,7 @@ def replan_cause(object_id: str, reason: int, message: str) -> str | None:
     """
     if reason in REPLAN_REASONS:
         return f'{REPLAN_REASONS[reason]} relocating {object_id!r}: {message}'
-    if 200 <= reason < 300:
+    if reason_family(reason) == ReasonFamily.PLANNING_FAILURE:
         return f'{object_id!r} no longer feasible (reason {reason}): {message}'
     return None
 

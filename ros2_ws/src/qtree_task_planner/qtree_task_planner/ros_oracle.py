@@ -14,6 +14,7 @@ from typing import Any
 
 import rclpy
 from qtree_msgs.srv import RelocateObject
+from stpik_motion_planner.result import ReasonFamily, reason_family
 
 from qtree_task_planner.exceptions import OracleUnavailableError
 from qtree_task_planner.oracle import (
@@ -149,14 +150,15 @@ class RosPlannerOracle:
                 raise OracleUnavailableError(object_id, relocated, detail)
             self.retries += 1
             self.stop.wait(self.backoff.delay(busy - 1))
-        if 100 <= response.reason < 200:
+        family = reason_family(response.reason)
+        if family in (ReasonFamily.REQUEST_ERROR, ReasonFamily.UNKNOWN):
             detail = f'request rejected (reason {response.reason}): {response.message}'
             raise OracleUnavailableError(object_id, relocated, detail)
         self.planner_runs += not response.from_cache
         self.reuse.count(relocated, object_id, response.from_cache)
         if response.feasible:
             return FeasibilityAnswer(True, ())
-        if response.reason >= 300:  # a time-out says nothing about who blocks
+        if family == ReasonFamily.RUNTIME_FAILURE:  # a time-out says nothing about who blocks
             return FeasibilityAnswer(False, None)
         key = (frozenset(relocated), object_id)
         self._approaches[key] = approach_blockers_of(response, relocated, object_id)

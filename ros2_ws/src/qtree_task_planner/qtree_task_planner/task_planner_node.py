@@ -15,12 +15,12 @@ from qtree_msgs.msg import QTree as QTreeMsg
 from qtree_msgs.msg import Scene, TrainingStats
 from qtree_msgs.srv import RelocateObject
 from qtree_node_support.lifecycle import run_node
-from qtree_node_support.qos import SERVICE_QOS, action_server_qos
+from qtree_node_support.qos import LATCHED_QOS, SERVICE_QOS, action_server_qos
 from rclpy.action import ActionServer, CancelResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from qtree_task_planner.goal_run import (
     TIMEOUTS,
@@ -33,12 +33,6 @@ from qtree_task_planner.goal_run import (
 from qtree_task_planner.messages import result_msg, stats_msg, tree_msg
 from qtree_task_planner.sequence_execution import SequenceExecution
 
-LATCHED_QOS = QoSProfile(  # /scene and /qtree: late joiners get the last message
-    depth=1,
-    history=HistoryPolicy.KEEP_LAST,
-    reliability=ReliabilityPolicy.RELIABLE,
-    durability=DurabilityPolicy.TRANSIENT_LOCAL,
-)
 STATS_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # bursts of episodes
 Result = RetrieveTarget.Result
 

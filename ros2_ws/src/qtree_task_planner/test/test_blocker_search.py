@@ -29,7 +29,7 @@ from qtree_task_planner.oracle import (
     approach_blockers_of,
     recheck_config,
 )
-from qtree_task_planner.synthetic import (
+from qtree_task_planner.testing import (
     TOY_OBSTACLES,
     TOY_OPTIMAL_LEVEL,
     TOY_REQUIREMENTS,

@@ -14,7 +14,7 @@ from qtree_task_planner import training
 from qtree_task_planner.extraction import best_known_sequence
 from qtree_task_planner.oracle import TableOracle
 from qtree_task_planner.rewards import REWARD_TARGET
-from qtree_task_planner.synthetic import (
+from qtree_task_planner.testing import (
     TOY_OBSTACLES,
     TOY_REQUIREMENTS,
     decoy_requirements,

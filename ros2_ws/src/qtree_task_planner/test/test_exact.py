@@ -6,8 +6,8 @@ import pytest
 from qtree_task_planner.exact import count_feasible_sequences, solve_exact
 from qtree_task_planner.exceptions import SearchLimitExceededError
 from qtree_task_planner.oracle import TableOracle
-from qtree_task_planner.synthetic import TOY_OBSTACLES as OBSTACLES
-from qtree_task_planner.synthetic import TOY_REQUIREMENTS, synthetic_scenario
+from qtree_task_planner.testing import TOY_OBSTACLES as OBSTACLES
+from qtree_task_planner.testing import TOY_REQUIREMENTS, synthetic_scenario
 
 
 def _brute_force_counts(requirements: dict, obstacles: tuple[str, ...]) -> dict[int, int]:

@@ -10,7 +10,7 @@ from qtree_task_planner.planners import (
     canonical_planner_name,
     make_trainer,
 )
-from qtree_task_planner.synthetic import TOY_MOVABLE, TOY_OPTIMAL_LEVEL, TOY_REQUIREMENTS
+from qtree_task_planner.testing import TOY_MOVABLE, TOY_OPTIMAL_LEVEL, TOY_REQUIREMENTS
 from qtree_task_planner.training import STOP_CANCELLED, QTreeTrainer, TrainingConfig
 
 

@@ -5,7 +5,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from qtree_task_planner.exact import count_feasible_sequences, solve_exact
 from qtree_task_planner.oracle import TableOracle
-from qtree_task_planner.synthetic import random_requirements
+from qtree_task_planner.testing import random_requirements
 from qtree_task_planner.training import TrainingConfig, train
 
 SETTINGS = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -53,6 +53,9 @@ def test_request_errors_and_timeouts_raise() -> None:
     rejected = ScriptedClient(Response(reason=Response.UNKNOWN_OBJECT, message="no 'X'"))
     with pytest.raises(OracleUnavailableError, match=r"reason 101.*no 'X'"):
         RosPlannerOracle(rejected, 1.0, 1.0).feasible((), 'X')
+    unknown = ScriptedClient(Response(reason=404, message='from a newer planner'))
+    with pytest.raises(OracleUnavailableError, match=r'reason 404.*newer planner'):
+        RosPlannerOracle(unknown, 1.0, 1.0).feasible((), 'O1')  # never learned as -1
     silent = ScriptedClient(None, None)  # a lost reply is asked again once
     with pytest.raises(OracleUnavailableError, match=r'no answer in 0\.1 s'):
         RosPlannerOracle(silent, 0.1, 1.0).feasible((), 'O1')

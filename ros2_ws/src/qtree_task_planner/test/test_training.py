@@ -4,8 +4,8 @@ import pytest
 from qtree_task_planner.exceptions import InvalidParameterError, OracleUnavailableError
 from qtree_task_planner.extraction import steady_state_root_q
 from qtree_task_planner.oracle import MemoOracle, TableOracle
-from qtree_task_planner.synthetic import TOY_MOVABLE as MOVABLE
-from qtree_task_planner.synthetic import TOY_REQUIREMENTS
+from qtree_task_planner.testing import TOY_MOVABLE as MOVABLE
+from qtree_task_planner.testing import TOY_REQUIREMENTS
 from qtree_task_planner.training import (
     STOP_CANCELLED,
     STOP_MAX_EPISODES,
@@ -156,7 +156,7 @@ def test_config_validation_names_the_field(field: str, value: float) -> None:
 def test_a_short_training_that_reached_the_target_returns_the_best_known_sequence() -> None:
     """Eq. (19) finds nothing while the root edges still hold 0; the result falls back to the
     best explored target-reaching sequence and says so (failed before: ``sequence == ()``)."""
-    from qtree_task_planner.synthetic import synthetic_scenario
+    from qtree_task_planner.testing import synthetic_scenario
 
     obstacles, requirements = synthetic_scenario('s2')
     extractions = []

@@ -35,7 +35,7 @@ import numpy as np
 import pinocchio as pin
 
 from stpik_motion_planner.collision import SceneWorld
-from stpik_motion_planner.result import PlanResult, Reason
+from stpik_motion_planner.result import PlanResult, Reason, ReasonFamily, reason_family
 
 if TYPE_CHECKING:
     from stpik_motion_planner.planner import MotionPlanner
@@ -149,7 +149,7 @@ class BlockerFinder:
             The annotated answer; when the deadline cut the sweeps short, its blockers are those
             of the approaches swept so far and its message says so.
         """
-        if result.feasible or not 200 <= int(result.reason) < 300:
+        if result.feasible or reason_family(result.reason) != ReasonFamily.PLANNING_FAILURE:
             return result
         start = time.perf_counter()
         found = self.find(object_id, relocated, deadline)

@@ -7,19 +7,12 @@ import dataclasses
 from rcl_interfaces.msg import ParameterDescriptor, ParameterType, SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from stpik_motion_planner.config import INTEGER_FIELDS, RANGES, PlannerConfig, check_value
 from stpik_motion_planner.conversions import range_descriptor
 from stpik_motion_planner.exceptions import InvalidConfig, MotionPlannerError
 from stpik_motion_planner.grasps import GRASP_FAMILIES, check_families
 
-SCENE_QOS = QoSProfile(  # the /scene contract of qtree_msgs/msg/Scene.msg
-    depth=1,
-    history=HistoryPolicy.KEEP_LAST,
-    reliability=ReliabilityPolicy.RELIABLE,
-    durability=DurabilityPolicy.TRANSIENT_LOCAL,
-)
 EXTRA = {  # name: (default, low, high, description)
     'execution_timeout_s': (30.0, 0.1, 600.0, 'time for the sim to follow a segment [s]'),
     'goal_tolerance_rad': (0.02, 1e-4, 0.5, 'joint error at which a segment is reached [rad]'),

@@ -16,7 +16,7 @@ from typing import Any
 from qtree_msgs.msg import PlanningEvent, Scene
 from qtree_msgs.srv import RelocateObject
 from qtree_node_support.lifecycle import run_node
-from qtree_node_support.qos import SERVICE_QOS
+from qtree_node_support.qos import LATCHED_QOS, SERVICE_QOS
 from qtree_node_support.text import clip
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
@@ -46,7 +46,7 @@ class MotionPlannerNode(Node):
             Scene,
             '/scene',
             self._on_scene,
-            api.SCENE_QOS,
+            LATCHED_QOS,
             callback_group=MutuallyExclusiveCallbackGroup(),
         )
         self._execution = Execution(self)  # open or closed loop (execution_mode)

@@ -37,6 +37,24 @@ class Reason(IntEnum):
     GRASP_FAILED = 305  # the attach service refused the grasp; undone, re-plan (#32)
 
 
+class ReasonFamily(IntEnum):
+    """The families of ``RelocateObject.srv``'s reason codes (nav2/MoveIt style: the hundreds)."""
+
+    SUCCESS = 0
+    REQUEST_ERROR = 1  # 1xx: the request or scene is wrong; asking again gives the same answer
+    PLANNING_FAILURE = 2  # 2xx: planned, infeasible (-1 of eq. 8)
+    RUNTIME_FAILURE = 3  # 3xx: time-out, busy, execution: says nothing about feasibility
+    UNKNOWN = 9  # negative or >= 400: no family of the .srv (a client cannot read the answer)
+
+
+def reason_family(code: int) -> ReasonFamily:
+    """Family of a reason code, also of a 1xx-3xx code this planner does not know (a newer one)."""
+    family = int(code) // 100
+    if code < 0 or family > ReasonFamily.RUNTIME_FAILURE:
+        return ReasonFamily.UNKNOWN
+    return ReasonFamily(family) if code else ReasonFamily.SUCCESS
+
+
 def _empty(*shape: int) -> np.ndarray:
     return np.zeros(shape)
 

@@ -12,7 +12,7 @@ import pytest
 from qtree_scene.generator import generate_clutter
 from qtree_scene.placement import drop_slots
 from qtree_scene.scene import ObjectSpec
-from stpik_motion_planner.benchmarking.verification import carried_poses, tilt_deg
+from stpik_motion_planner.carried import carried_poses, tilt_deg
 from stpik_motion_planner.collision import object_geometry, object_transform
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import InvalidConfig, InvalidRequest

@@ -98,3 +98,16 @@ def test_planning_timeout_past_reports_the_elapsed_time():
     err = PlanningTimeout.past(deadline, limit_s)
     assert 0.06 <= err.elapsed_s < 0.5 and err.limit_s == limit_s
     assert str(err).startswith('planning took 0.0') and '> time limit 0.050 s' in str(err)
+
+
+def test_reason_families_follow_the_hundreds_of_the_srv() -> None:
+    from stpik_motion_planner.result import Reason, ReasonFamily, reason_family
+
+    assert reason_family(Reason.SUCCESS) == ReasonFamily.SUCCESS
+    assert reason_family(Reason.NO_SCENE) == ReasonFamily.REQUEST_ERROR
+    assert reason_family(Reason.CARRIED_COLLISION) == ReasonFamily.PLANNING_FAILURE
+    assert reason_family(Reason.PLANNER_BUSY) == ReasonFamily.RUNTIME_FAILURE
+    assert reason_family(250) == ReasonFamily.PLANNING_FAILURE  # a newer planner's 2xx code
+    assert reason_family(400) == ReasonFamily.UNKNOWN
+    assert reason_family(-1) == ReasonFamily.UNKNOWN
+    assert {reason_family(r) for r in Reason} == set(ReasonFamily) - {ReasonFamily.UNKNOWN}

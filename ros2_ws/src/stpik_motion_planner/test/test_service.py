@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 
-from qtree_scene.conversions import scene_msg
+from qtree_scene.message import scene_msg
 from qtree_scene.scenario import load_scenario
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.result import Reason

@@ -231,7 +231,7 @@ def test_fix13_the_carry_keeps_the_object_near_upright(robot):
     carried object 166° from upright; solved from the lift's end it stays within 20° (measured
     19.6°; asserted with a 2× margin)."""
     from qtree_scene.scenario import load_scenario
-    from stpik_motion_planner.benchmarking.verification import carried_poses, tilt_deg
+    from stpik_motion_planner.carried import carried_poses, tilt_deg
     from stpik_motion_planner.planner import MotionPlanner
 
     planner = MotionPlanner(load_scenario('s2'), model=robot)
