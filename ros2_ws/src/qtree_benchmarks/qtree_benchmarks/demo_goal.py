@@ -121,6 +121,10 @@ def _spin_until_done(node: Any, future: Any, nodes: list[NodeProcess], deadline:
             rclpy.spin_once(node, timeout_sec=0.1)
         except ExternalShutdownException:  # rclpy's SIGINT handler shut the context down
             raise KeyboardInterrupt from None
+        except Exception:  # RCLError: the handler shut it down while the wait set was built
+            if not rclpy.ok():  # (suite of c3e95c4: Ctrl-C exited 1 instead of 130)
+                raise KeyboardInterrupt from None
+            raise
         check_alive(nodes)
         if time.monotonic() > deadline:
             raise DemoError('timed out waiting for the task planner (see --timeout)')
