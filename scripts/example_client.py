@@ -55,6 +55,7 @@ def call(node, client, request, timeout_s: float = 60.0):
 
 
 def main() -> int:
+    """Set the scene, ask one relocation, run a goal; exit code 0 on success."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--execute', action='store_true', help='run the learned sequence')
     parser.add_argument('--max-episodes', type=int, default=500)

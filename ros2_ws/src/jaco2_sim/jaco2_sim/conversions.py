@@ -1,5 +1,6 @@
 """Message ↔ core conversions for the simulator node (the only module besides the node that imports
-ROS message types)."""
+ROS message types).
+"""
 
 from __future__ import annotations
 

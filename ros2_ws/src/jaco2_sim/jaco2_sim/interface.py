@@ -62,7 +62,8 @@ def param(node: Node, name: str) -> Any:
 
 def apply_parameters(node: Node, core: Simulation, params: Sequence[Parameter]) -> None:
     """After a parameter change (or at start): reconfigure the disturbances if one of
-    ``params`` is one, arm the ``scene_events``."""
+    ``params`` is one, arm the ``scene_events``.
+    """
     if any(p.name in PARAMETER_FIELDS for p in params):
         core.configure_disturbances(disturbance_values(node))
     for p in params:

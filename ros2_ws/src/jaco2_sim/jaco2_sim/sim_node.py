@@ -47,8 +47,7 @@ class Jaco2SimNode(Node):
         self.state_pub = self.create_publisher(JointState, '/joint_states', api.STATE_QOS)
         self.scene_pub = self.create_publisher(Scene, '/scene', LATCHED_QOS)
         self.urdf_pub = self.create_publisher(String, '/robot_description', LATCHED_QOS)
-        # motion on its own thread: services and parameters (scene loading) never stop it (#18)
-        self._motion = MutuallyExclusiveCallbackGroup()
+        self._motion = MutuallyExclusiveCallbackGroup()  # services never stop the motion (#18)
         qos, group = api.TRAJECTORY_QOS, {'callback_group': self._motion}
         self.create_subscription(JointTrajectory, '/joint_trajectory', self._on_raw_trajectory,
                                  qos, raw=True, **group)  # fmt: skip
@@ -142,7 +141,8 @@ def run(args: list[str] | None = None, **options: Any) -> int:
                     name='jaco2_sim', **options)  # fmt: skip
 
 
-def main(args: list[str] | None = None) -> None:  # the console script
+def main(args: list[str] | None = None) -> None:
+    """The console script: :func:`run`, its code as the exit status."""
     sys.exit(run(args))
 
 

@@ -230,7 +230,10 @@ class Simulation:
         """Follow a trajectory (empty: stop); log lines ``(warning or '', info)``.
 
         Args:
-            names: joint names; times (N,) [s]; positions (N rows) [rad]; velocities or None.
+            names: joint names of the columns.
+            times: time from start of each point [s], shape (N,).
+            positions: joint angles of each point [rad], N rows.
+            velocities: joint velocities of each point [rad/s], N rows, or None.
 
         Raises:
             Jaco2SimError, ModelError: a bad trajectory (the arm keeps its current motion).
@@ -248,6 +251,8 @@ class Simulation:
         """Attach (``attach``) or release ``object_id``: (answer message, warning or '').
 
         Args:
+            object_id: the object grasped or released.
+            attach: True to attach it to the hand, False to release it.
             status_code: ObjectState.STATUS_* of the object after a release.
 
         Raises:

@@ -98,7 +98,8 @@ def retrieve_target(args: argparse.Namespace, nodes: list[NodeProcess]) -> Any:
 
 def _wait_for_server(client: Any) -> bool:
     """``client.wait_for_server`` for 0.5 s; KeyboardInterrupt once rclpy's SIGINT handler
-    shut the context down (the suite of 9ffde18: Ctrl-C there exited 1 with RCLError, not 130)."""
+    shut the context down (the suite of 9ffde18: Ctrl-C there exited 1 with RCLError, not 130).
+    """
     import rclpy
 
     try:

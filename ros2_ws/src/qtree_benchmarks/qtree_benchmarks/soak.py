@@ -242,7 +242,8 @@ def summary_failures(output: str) -> list[str]:
 
 def fresh_clone(work_dir: Path, branch: str = 'main') -> Path:
     """Clone ``branch`` of this repository into ``work_dir/qtree-tamp`` with ``../shared`` beside
-    it (a symbolic link to this checkout's), as CI has it; the clone's path."""
+    it (a symbolic link to this checkout's), as CI has it; the clone's path.
+    """
     clone = work_dir / 'qtree-tamp'
     subprocess.run(
         ['git', 'clone', '--quiet', '--branch', branch, '--single-branch', str(REPO_ROOT), clone],

@@ -70,7 +70,8 @@ class StopRequest:
     def clear(cls) -> None:
         """Forget the request once it was answered (the end of :func:`run_node`). Not at the
         start of a run: a signal landing before that would be forgotten and the node would
-        spin on (seen in the fresh-clone soak: one of 200 storm runs of the sim hung)."""
+        spin on (seen in the fresh-clone soak: one of 200 storm runs of the sim hung).
+        """
         cls.signal_name = None
 
 

@@ -27,7 +27,8 @@ _SAFE = re.compile(r'[^A-Za-z0-9_.-]+')
 def should_record(topic: str) -> bool:
     """True for every topic of the graph but parameter events, the topics the recorder derives
     itself (``/tf``, ``/tf_static``, ``/scene_markers``) and hidden topics other than an action's
-    feedback and status."""
+    feedback and status.
+    """
     if topic in EXCLUDED_TOPICS:
         return False
     hidden = any(part.startswith('_') for part in topic.split('/'))

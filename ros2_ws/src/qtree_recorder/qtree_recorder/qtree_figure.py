@@ -98,7 +98,8 @@ class TreeDrawing:
 
     def note(self) -> str:
         """What was left out, e.g. ``pruned to the top 5 nodes per level by Q: 120 of 160 nodes
-        and 121 of 163 edges not drawn (level 2: 30, level 3: 90)``; ``''`` when nothing was."""
+        and 121 of 163 edges not drawn (level 2: 30, level 3: 90)``; ``''`` when nothing was.
+        """
         if not self.omitted_nodes and not self.omitted_edges:
             return ''
         per_level = ', '.join(
@@ -122,7 +123,8 @@ def _kind(object_id: str, q: float, reward: float | None, target_id: str | None)
 
 def infer_target(edges: Sequence[EdgeTuple]) -> str | None:
     """The target id: the object of an edge with a positive reward (only the target's, eq. 8),
-    or, without rewards, of an edge whose Q is r_T."""
+    or, without rewards, of an edge whose Q is r_T.
+    """
     for edge in edges:
         if (edge[5] > 0.0) if len(edge) > 5 else (edge[3] >= TARGET_REWARD):
             return str(edge[2])
@@ -264,7 +266,8 @@ HIGHLIGHT = '#ff7f0e'
 
 def save_png(drawing: TreeDrawing, path: Path | str, *, title: str = 'Q-tree') -> Path:
     """Draw the tree (levels as rows, edges labelled with Q, styled by kind, extracted path
-    highlighted, the pruning note below) and write a PNG; returns the path."""
+    highlighted, the pruning note below) and write a PNG; returns the path.
+    """
     import matplotlib
 
     matplotlib.use('Agg')

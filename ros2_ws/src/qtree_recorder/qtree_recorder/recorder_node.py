@@ -2,9 +2,8 @@
 
 Discovers topics periodically, subscribes with ``raw=True`` and the publishers' QoS (latched
 topics transient-local), and queues the CDR bytes to a worker thread that writes them unchanged
-and derives ``/tf``, ``/tf_static`` and ``/scene_markers`` (:mod:`qtree_recorder.recording`), so
-the arm and scene show when the log is opened in Foxglove or Rerun. Optionally feeds the live
-Rerun view. SIGINT finishes the file (summary + ``rosbag2`` record) and exits 0.
+and derives ``/tf``, ``/tf_static``, ``/scene_markers`` (:mod:`qtree_recorder.recording`) for
+Foxglove and Rerun; optionally feeds the live Rerun view. SIGINT finishes the file and exits 0.
 """
 
 from __future__ import annotations
@@ -142,7 +141,8 @@ def run(args: list[str] | None = None, **options: Any) -> int:
     return run_node(RecorderNode, args=args, cleanup=RecorderNode.finish, **options)
 
 
-def main(args: list[str] | None = None) -> None:  # the console script
+def main(args: list[str] | None = None) -> None:
+    """The console script: :func:`run`, its code as the exit status."""
     sys.exit(run(args))
 
 

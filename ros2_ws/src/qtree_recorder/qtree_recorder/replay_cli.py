@@ -114,7 +114,8 @@ def print_summary(run: McapRun) -> None:
 
 def _print_world(run: McapRun) -> None:
     """The changing world (#32): scene events, SCENE_CHANGED / GRASP_FAILED answers and
-    re-plans, with their times from the start of the log."""
+    re-plans, with their times from the start of the log.
+    """
     from qtree_recorder.world_changes import TOPICS, timeline
 
     lines = list(timeline(run.messages(TOPICS), run.start_ns))

@@ -32,7 +32,8 @@ class WorldChanges:
 
     def on_message(self, topic: str, msg: Any) -> list[str]:
         """The lines ``msg`` adds to the timeline (often none); a malformed message gives one
-        line saying so, never an exception."""
+        line saying so, never an exception.
+        """
         try:
             if topic == '/scene':
                 return self._on_scene(msg)
@@ -81,7 +82,8 @@ def replan_line(msg: Any) -> str:
 
 def timeline(messages: Iterable[Any], start_ns: int) -> Iterator[str]:
     """``"  +12.345 s  <line>"`` for every line of the decoded ``messages`` (``.topic``,
-    ``.message``, ``.log_time_ns``) of :data:`TOPICS`, in order; times from ``start_ns``."""
+    ``.message``, ``.log_time_ns``) of :data:`TOPICS`, in order; times from ``start_ns``.
+    """
     changes = WorldChanges()
     for item in messages:
         for line in changes.on_message(item.topic, item.message):

@@ -1,5 +1,6 @@
 """Checks of one field of an outside input (scenario file, scene message, scene event) and the
-quoting of a bad value in the error message, shared by every reader of outside data (no ROS)."""
+quoting of a bad value in the error message, shared by every reader of outside data (no ROS).
+"""
 
 from __future__ import annotations
 

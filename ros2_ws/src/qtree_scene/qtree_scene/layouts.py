@@ -85,6 +85,7 @@ def candidate(
 
 
 def overlaps_any(fp: Footprint, placed: Iterable[Footprint], gap: float) -> bool:
+    """Whether footprint ``fp`` comes closer than ``gap`` [m] to any ``placed`` one."""
     # Cheap bounding test first; 2·gap because overlap() grows rectangles by gap per axis, up
     # to gap·√2 at their corners (two boxes corner to corner were never compared).
     b = bound(fp)
@@ -120,7 +121,8 @@ def uniform_layout(
 
 def movable(shape: Shape, center: tuple[float, float]) -> bool:
     """Whether the accessible layout counts on carrying the object away: the hand closes on it
-    and it stands in the side-grasp workspace, farther than ``CARRY_MIN_REACH_M``."""
+    and it stands in the side-grasp workspace, farther than ``CARRY_MIN_REACH_M``.
+    """
     return (
         shape.grasp_width <= HAND_OPENING_M
         and in_side_grasp_workspace(center)

@@ -94,7 +94,8 @@ def _rows(
 ) -> bool:
     """Rows across ``radial``: the target's row (its neighbours with ``shelf``), then rows in
     front of it, then behind it; each object beside the last one of its row, alternating
-    sides, a random gap apart."""
+    sides, a random gap apart.
+    """
     across = np.array([-radial[1], radial[0]])
     yaw = math.atan2(across[1], across[0])  # boxes' long side along the row
     target_depth = _depth(shapes[0])
@@ -169,7 +170,8 @@ def _around(
 ) -> bool:
     """Each obstacle as near the target as it goes at a random gap, over :data:`RING_ANGLES`
     directions (the nearest wins: rings form); ``mixed``: boxes at random yaw, directions in
-    front of the target (toward the base) and beside it only."""
+    front of the target (toward the base) and beside it only.
+    """
     centre = np.asarray(placed[0].center)
     toward_base = math.atan2(-radial[1], -radial[0])
     for shape in shapes[1:]:
@@ -197,7 +199,8 @@ def _nearest(
     front: bool,
 ) -> tuple[float, Footprint] | None:
     """The free pose of ``shape`` nearest the target ``centre`` over the directions tried
-    (``front``: within ±0.6 π of ``toward_base``, else all around from ``start``)."""
+    (``front``: within ±0.6 π of ``toward_base``, else all around from ``start``).
+    """
     best = None
     for i in range(RING_ANGLES):
         if front:

@@ -130,7 +130,8 @@ def drop_slots(scenario: Scenario) -> tuple[Slot, ...]:
 
 def _ring_slots(scenario: Scenario, rho_max: float, taken: tuple[Slot, ...]) -> tuple[Slot, ...]:
     """Slots on rings from ``rho_max`` [m] inward (outer first), none where the hand placing
-    in one of ``taken`` would be."""
+    in one of ``taken`` would be.
+    """
     movable = [o for o in scenario.objects if o.role != 'static']
     r_max = max((footprint_radius(o) for o in movable), default=0.03)
     table = _table(scenario)

@@ -205,7 +205,8 @@ class BlockerSearchResult:
 
 class _SearchStop(Exception):  # noqa: N818 (a control-flow signal, not an error)
     """The search's own budget (runs, time, expansions) is used up or it was cancelled: unwinds
-    to :func:`blocker_search`, which returns the incumbent. Never leaves this module."""
+    to :func:`blocker_search`, which returns the incumbent. Never leaves this module.
+    """
 
     def __init__(self, which: str) -> None:
         self.which = which
@@ -337,7 +338,8 @@ class BlockerSearch:
 
     def query(self, order: tuple[str, ...], obj: str) -> bool:
         """Can ``obj`` be relocated after ``order``? Known constraints answer without a query; an
-        infeasible answer adds a (sound, or verified, or trivial) constraint."""
+        infeasible answer adds a (sound, or verified, or trivial) constraint.
+        """
         done = frozenset(order)
         if not self._met(obj, done):
             return False
@@ -383,7 +385,8 @@ class BlockerSearch:
         is known movable; else first every remaining "obstacle after nothing" question (those
         named by reports first), so that a scene where nothing is movable costs no more runs
         than the exact search (see the module docstring). False: nothing is movable, and every
-        answer after nothing has been given its trivial constraint."""
+        answer after nothing has been given its trivial constraint.
+        """
         if not self._guard or self._movable:
             return True
         if self._nothing_movable:
@@ -410,7 +413,8 @@ class BlockerSearch:
 
     def _contradicted(self, obj: str, x: frozenset[str]) -> bool:
         """``obj`` was found feasible with every object of ``x`` standing (and maybe more): by
-        monotonicity ``x`` could not then be a constraint. Repaired constraints are final."""
+        monotonicity ``x`` could not then be a constraint. Repaired constraints are final.
+        """
         if (obj, x) in self._weakest:
             return False
         return any(x <= p for p in self._standing.get(obj, ()))
@@ -421,7 +425,8 @@ class BlockerSearch:
 
     def _repair(self, obj: str) -> None:
         """Replace each contradicted constraint of ``obj`` by the weakest constraints of the
-        answers it came from (all obstacles not in their set S; see the module docstring)."""
+        answers it came from (all obstacles not in their set S; see the module docstring).
+        """
         repaired: list[frozenset[str]] = []
         for x in self.constraints.get(obj, ()):
             weaker = [x]
@@ -448,7 +453,8 @@ class BlockerSearch:
 
         Each approach needs ALL of its blockers removed, so every set that frees ``obj`` meets
         every hitting set of the approaches' blocker sets: one object in front of the hand in
-        every approach gives the constraint {that object} instead of the union of all."""
+        every approach gives the constraint {that object} instead of the union of all.
+        """
         read = getattr(self.oracle, 'approach_blockers', None)
         sets = read(tuple(sorted(done)), obj) if read is not None else None
         if not sets:
@@ -480,7 +486,8 @@ class BlockerSearch:
 
     def _branch(self, chosen: frozenset[str], order: list[str]) -> list[str] | None:
         """Objects one of which every candidate containing ``chosen`` must add; None: ``chosen``
-        is a candidate itself."""
+        is a candidate itself.
+        """
         done = frozenset(order)
         if len(order) == len(chosen):
             unmet = [c for c in self.constraints.get(self.target, ()) if not c & done]
@@ -495,7 +502,8 @@ class BlockerSearch:
 
     def _disjoint_unmet(self, chosen: frozenset[str], order: list[str]) -> int:
         """How many more objects any candidate containing ``chosen`` needs at least: a greedy
-        packing of pairwise disjoint unmet constraints that no object of ``chosen`` can meet."""
+        packing of pairwise disjoint unmet constraints that no object of ``chosen`` can meet.
+        """
         done = frozenset(order)
         needs = [c for c in self.constraints.get(self.target, ()) if not c & chosen]
         for obj in chosen - done:
@@ -511,7 +519,8 @@ class BlockerSearch:
         """Obstacles that may belong to some candidate: the least fixpoint of "every known
         constraint of o meets the set" grown from the empty set (an object never refused has no
         constraint and is in it). In a candidate's order each object's constraints are met by
-        the objects before it, so by induction every candidate lies inside this set."""
+        the objects before it, so by induction every candidate lies inside this set.
+        """
         reach: set[str] = set()
         grown = True
         while grown:
@@ -575,7 +584,8 @@ class BlockerSearch:
 
     def _test(self, order: list[str]) -> bool:
         """Relocate the candidate in its order, then the target; False at the first failure
-        (its feasible prefix kept for a completion)."""
+        (its feasible prefix kept for a completion).
+        """
         self.candidates += 1
         walked: list[str] = []
         reached = True
@@ -603,7 +613,8 @@ class BlockerSearch:
 
     def _complete(self, prefix: tuple[str, ...]) -> None:
         """Greedy completion of the feasible ``prefix`` into an incumbent (module docstring),
-        within :data:`COMPLETION_SHARE` of the runs left; every step is a real answer."""
+        within :data:`COMPLETION_SHARE` of the runs left; every step is a real answer.
+        """
         if frozenset(prefix) in self._completed:
             return
         self._completed.add(frozenset(prefix))
@@ -635,7 +646,8 @@ class BlockerSearch:
 
     def _next_step(self, order: list[str]) -> str | None:
         """The first of :meth:`_next_objects` feasible after ``order`` (asked in turn; each
-        failure adds a constraint, so the objects it names are tried next), or None."""
+        failure adds a constraint, so the objects it names are tried next), or None.
+        """
         while True:
             objects = self._next_objects(order)
             if not objects:
@@ -646,7 +658,8 @@ class BlockerSearch:
     def _next_objects(self, order: list[str]) -> list[str]:
         """Objects a completion may relocate after ``order``: those that the target's unmet
         constraints name, smallest constraint first, then those that theirs name (breadth
-        first); objects already found feasible after a subset of ``order`` first."""
+        first); objects already found feasible after a subset of ``order`` first.
+        """
         done = frozenset(order)
         seen: list[str] = []
         layer = [self.target]
@@ -697,7 +710,8 @@ class BlockerSearch:
     def _confirm(self, size: int | None) -> bool:
         """Recheck the suspect answers that the certificate "no candidate of at most ``size``
         obstacles" (None: of any size) relies on (module docstring). True: the certificate
-        stands; False: a recheck turned feasible and the enumeration must start again."""
+        stands; False: a recheck turned feasible and the enumeration must start again.
+        """
         if self._recheck is None or (size is not None and size < 0):
             return True
         limit = len(self.obstacles) if size is None else size
@@ -746,7 +760,8 @@ class BlockerSearch:
 
     def _recheck_answer(self, key: SetKey) -> bool:
         """Recheck one answer (a real run); True when it turned feasible (constraints it
-        alone supported removed)."""
+        alone supported removed).
+        """
         done, obj = key
         self._check_budget()
         self.rechecks += 1
@@ -772,7 +787,8 @@ class BlockerSearch:
 
     def run(self) -> BlockerSearchResult:
         """Search until the optimum, a proof of unsolvability, or the budget (then the
-        incumbent, if any)."""
+        incumbent, if any).
+        """
         self._guard = True
         try:
             return self._search()

@@ -193,7 +193,11 @@ def execute_with_replans(
     executed, learn the rest again from the current /scene and go on, ``max_replans`` times.
 
     Args:
-        first: the training result of the goal's scene; ``scene``: that /scene message.
+        goal_handle: the RetrieveTarget goal being executed (feedback, cancel).
+        ctx: the node's goal context (parameters, scene, execution, stop flag).
+        settings: the goal's validated settings (planner, ``max_replans``, ...).
+        first: the training result of the goal's scene.
+        scene: the /scene message that training was made on.
     """
     results, prefix = [first], ()
     timeout_s = ctx.param('execute_timeout_s')
@@ -258,7 +262,8 @@ def execute_with_replans(
 
 def scene_watch(scene: Callable[[], Any], baseline: Any) -> Callable[[list[str]], list[str]]:
     """``changed(executed)``: what changed in the clutter of ``scene()`` since ``baseline``
-    (a /scene message), the objects in ``executed`` left out (they are carried away)."""
+    (a /scene message), the objects in ``executed`` left out (they are carried away).
+    """
     before = clutter_objects(baseline)
 
     def changed(executed: list[str]) -> list[str]:

@@ -66,7 +66,8 @@ def feedback_msg(
     stats: EpisodeStats | None, replan_causes: Sequence[str] = (), reused: Sequence[int] = ()
 ) -> RetrieveTarget.Feedback:
     """Action feedback from one episode's statistics (None: only the re-plans, #32), with the
-    answers reused by each re-plan whose training ended (``reused``)."""
+    answers reused by each re-plan whose training ended (``reused``).
+    """
     msg = RetrieveTarget.Feedback(
         replans=len(replan_causes),
         replan_causes=list(replan_causes),
@@ -91,7 +92,8 @@ def holds_object(scene: Scene) -> bool:
 
 def tree_msg(tree: QTree, episode: int, stamp: Any) -> QTreeMsg:
     """A /qtree snapshot: every node (ids joined by ',') and edge; the edges of the extracted
-    sequence (eq. 19, or the best known one when eq. 19 finds none) are marked on_best_path."""
+    sequence (eq. 19, or the best known one when eq. 19 finds none) are marked on_best_path.
+    """
     index = {node.key: i for i, node in enumerate(tree.nodes())}
     best = {(edge.parent, edge.action) for edge in path_of(tree, extract(tree)[0])}
     edges = [

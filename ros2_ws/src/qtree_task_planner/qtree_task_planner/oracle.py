@@ -149,7 +149,8 @@ class TableOracle:
         """Feasibility and blockers: with ``report='union'`` (sound and complete) the objects of
         every clearing set not yet relocated; ``'fewest'`` only those of the clearing set with
         the fewest left (like the planner's "most promising approach", not sound); ``'none'``
-        no report."""
+        no report.
+        """
         self.queries += 1
         key = (frozenset(relocated), object_id)
         if key not in self._seen:
@@ -173,7 +174,8 @@ class TableOracle:
     ) -> tuple[frozenset[str], ...] | None:
         """Each clearing set minus ``relocated`` (the planner's per-approach blockers' analogue;
         exact, so as sound as the ``'union'`` report); None with ``report='none'`` or when the
-        object is feasible or has no clearing set."""
+        object is feasible or has no clearing set.
+        """
         needs = self.requirements.get(object_id)
         done = frozenset(relocated)
         if self.report == 'none' or not needs or any(need <= done for need in needs):
@@ -218,7 +220,8 @@ class MemoOracle:
 
     def clear_zone_feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """Verification query (:func:`ask_clear`), memoised and counted like the others; the
-        ordinary memoised answer when ``inner`` has no verification query of its own."""
+        ordinary memoised answer when ``inner`` has no verification query of its own.
+        """
         if not hasattr(self.inner, 'clear_zone_feasible'):
             return self.feasible(relocated, object_id)
         self.queries += 1

@@ -184,7 +184,8 @@ class Policy:
         self, tree: QTree, key: NodeKey, options: list[str], rng: np.random.Generator
     ) -> str | None:
         """H-LRND rule: the target if untried here, else uniform among the candidates (or, with
-        ``hlrnd_rule='positive-q'``, among the untried ones and those with Q > 0 when any)."""
+        ``hlrnd_rule='positive-q'``, among the untried ones and those with Q > 0 when any).
+        """
         children = tree.node(key).children
         if self.target_id in options and self.target_id not in children:
             return self.target_id

@@ -86,7 +86,8 @@ class ReuseCounter:
 
     def count(self, relocated: Iterable[str], object_id: str, from_cache: bool) -> None:
         """Note one answer to "``object_id`` after ``relocated``" (``from_cache``: the
-        response's flag)."""
+        response's flag).
+        """
         key = (frozenset(relocated), object_id)
         if key in self._seen:
             return
@@ -129,7 +130,8 @@ class PrefixOracle:
 
 def combined(results: Sequence[Any], prefix: Sequence[str]) -> Any:
     """One training result for the goal: the last training's, its sequence after ``prefix``
-    (the relocations kept before it), episodes, MP calls, planner runs and time summed [s]."""
+    (the relocations kept before it), episodes, MP calls, planner runs and time summed [s].
+    """
     last = results[-1]
     return dataclasses.replace(
         last,

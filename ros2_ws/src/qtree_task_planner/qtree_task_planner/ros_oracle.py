@@ -217,5 +217,6 @@ class RosPlannerOracle:
         self, relocated: tuple[str, ...], object_id: str
     ) -> tuple[frozenset[str], ...] | None:
         """The per-approach blockers (``approach_blocking_ids``) of the last infeasible
-        response about this pair, or None (no request is sent)."""
+        response about this pair, or None (no request is sent).
+        """
         return self._approaches.get((frozenset(relocated), object_id))

@@ -229,7 +229,8 @@ class QTree:
 
     def known_value(self, key: NodeKey) -> float:
         """Explored steady-state value of a node: max over its edges of r + gamma V(child) (the
-        reward alone for the target and failed edges), 0 without edges; optimism ignored."""
+        reward alone for the target and failed edges), 0 without edges; optimism ignored.
+        """
         return self._known[key][0]
 
     def known_choice(self, key: NodeKey) -> Edge | None:

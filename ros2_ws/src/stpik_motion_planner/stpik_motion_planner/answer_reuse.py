@@ -119,6 +119,9 @@ def reuse_answers(
     """The answers of ``entries`` (made in ``old``) still true in ``new``, and a summary line.
 
     Args:
+        old: the scene the answers were made in.
+        new: the scene now.
+        entries: the cached answers by ``(frozenset(relocated), object id)``.
         clear_of: whether a feasible answer's motion is clear of the changed objects now
             (:func:`clear_of_changes`).
     """
@@ -141,7 +144,8 @@ def reuse_answers(
 def clear_of_changes(planner: Any, result: PlanResult, object_id: str, now: list[ObjectSpec]):
     """Whether the feasible ``result`` (relocating ``object_id``) keeps ``planner``'s verifier
     clearance from the bodies ``now`` [the changed objects standing in the new scene] along its
-    whole motion, the carried object included (True when ``now`` is empty)."""
+    whole motion, the carried object included (True when ``now`` is empty).
+    """
     if not now:
         return True
     carried = Carried(planner.scenario.object(object_id), result.grasp_index, result.release_index)

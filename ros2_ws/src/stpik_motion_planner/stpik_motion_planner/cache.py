@@ -52,13 +52,14 @@ class FeasibilityCache:
 
     @property
     def hit_rate(self) -> float:
-        """hits / (hits + misses), 0 when nothing was asked."""
+        """Hits / (hits + misses), 0 when nothing was asked."""
         total = self.hits + self.misses
         return self.hits / total if total else 0.0
 
     def items(self) -> list[tuple[CacheKey, PlanResult]]:
         """Every stored ``(key, result)``, from a copy (atomic under the GIL: a check on another
-        thread may fill the cache meanwhile)."""
+        thread may fill the cache meanwhile).
+        """
         return list(self._results.copy().items())
 
     def __len__(self) -> int:

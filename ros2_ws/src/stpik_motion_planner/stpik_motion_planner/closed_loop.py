@@ -387,7 +387,8 @@ class ClosedLoopController:
 
     def _time_scale(self, error_m: float) -> float:
         """Rate of the reference time [-]: 1 up to ``slow_down_error_m``, 0 halfway to the
-        largest error (the arm lags: slow velocity limits, latency, a loaded machine)."""
+        largest error (the arm lags: slow velocity limits, latency, a loaded machine).
+        """
         c = self.config
         span = 0.5 * (c.max_tracking_error_m - c.slow_down_error_m)
         if error_m <= c.slow_down_error_m or span <= 0.0:

@@ -357,7 +357,8 @@ class Execution(TrajectoryExecution):
         clutter but the request's relocated ones (the planner left them out too) and the objects
         already placed on their drop slots, where they really stand (#29 point 5: they were left
         out; the planner's slot envelopes hold them). Not the object being relocated: carried,
-        it is part of the arm; released, the retreat starts from it (the planner checked it)."""
+        it is part of the arm; released, the retreat starts from it (the planner checked it).
+        """
         msg = self._scene_msg
         if msg is None:
             return SceneWorld([])

@@ -133,7 +133,7 @@ def command_msg(q: np.ndarray) -> JointState:
 
 
 def xyzquat_pose_msg(xyzquat: np.ndarray) -> Pose:
-    """xyz [m] + quaternion xyzw (7,) → Pose."""
+    """Xyz [m] + quaternion xyzw (7,) → Pose."""
     pose = Pose()
     pose.position.x, pose.position.y, pose.position.z = (float(v) for v in xyzquat[:3])
     o = pose.orientation

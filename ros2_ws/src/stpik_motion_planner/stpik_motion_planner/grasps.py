@@ -48,7 +48,8 @@ def side_rotation(yaw: float) -> np.ndarray:
 
 def top_rotation(yaw: float) -> np.ndarray:
     """Top-grasp EE orientation: z (approach) down, x (across the fingers) (−sin ψ, cos ψ, 0),
-    as in a side grasp at the same ``yaw`` [rad]; shape (3, 3)."""
+    as in a side grasp at the same ``yaw`` [rad]; shape (3, 3).
+    """
     c, s = math.cos(yaw), math.sin(yaw)
     return np.array([[-s, c, 0.0], [c, s, 0.0], [0.0, 0.0, -1.0]])
 
@@ -63,7 +64,8 @@ def rotation(approach: Approach) -> np.ndarray:
 def top_yaws(position: Sequence[float], count: int = TOP_YAWS) -> list[float]:
     """Closing yaws of a top grasp [rad]: the fingers across the base direction first (the
     wrist's natural turn), then ±π/count, ±2π/count, ... (a half turn in all: the open hand
-    is nearly symmetric under a half turn, joint 7 turns it further)."""
+    is nearly symmetric under a half turn, joint 7 turns it further).
+    """
     base = math.atan2(position[1], position[0])
     step = math.pi / count
     return [base + step * ((i + 1) // 2) * (1 if i % 2 else -1) for i in range(count)]

@@ -44,7 +44,8 @@ FAMILIES = 'grasp_families'  # string array parameter: PlannerConfig.grasp_famil
 
 def declare_parameters(node: Node) -> None:
     """Declare the planner's :data:`~stpik_motion_planner.config.RANGES`, ``grasp_families``
-    and :data:`EXTRA`."""
+    and :data:`EXTRA`.
+    """
     defaults = PlannerConfig()
     for name, (low, high, text) in RANGES.items():
         desc = range_descriptor(text, low, high, integer=name in INTEGER_FIELDS)

@@ -113,7 +113,8 @@ class PlannerService:
 
     def _carry_over(self, planner: MotionPlanner) -> str:
         """Keep in ``planner``'s cache the answers of the previous planner a scene change leaves
-        true (#32, :mod:`.answer_reuse`); the summary line. Never raises: a failure keeps none."""
+        true (#32, :mod:`.answer_reuse`); the summary line. Never raises: a failure keeps none.
+        """
         old = self._planner
         if old is None:
             return 'no cached answers'
@@ -134,6 +135,8 @@ class PlannerService:
         """Validate and answer from the cache at once; plan (waiting for the planner) if needed.
 
         Args:
+            object_id: the object to relocate.
+            relocated: the objects already relocated.
             received: ``time.monotonic()`` of the request [s].
             wait_s: longest wait for the planner from ``received`` (``request_timeout_s``) [s].
             scene_name: the scene the request is about ('' any: the current one).
@@ -176,7 +179,8 @@ class PlannerService:
 
     def _wait_for_scene(self, scene_name: str, deadline: float) -> MotionPlanner | None:
         """The planner once it serves ``scene_name`` (any when ''), a scene was rejected, or
-        ``deadline`` (``time.monotonic()`` [s]) passed; None when there is none."""
+        ``deadline`` (``time.monotonic()`` [s]) passed; None when there is none.
+        """
 
         def ready() -> bool:
             if self._planner is None:

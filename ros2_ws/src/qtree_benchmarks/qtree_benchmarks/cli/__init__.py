@@ -1,0 +1,1 @@
+"""The code of every command of ``scripts/``: one module per script, each with ``main``."""

@@ -30,6 +30,7 @@ TARGET = 0.9  # solvable share wanted for N = 10-30 [-]
 
 
 def parse() -> argparse.Namespace:
+    """Command-line options."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--sizes', type=int, nargs='+', default=[10, 20, 30])
     parser.add_argument('--densities', type=float, nargs='+', default=[0.15, 0.3])
@@ -47,6 +48,7 @@ def parse() -> argparse.Namespace:
 
 
 def write(rows: list[dict], meta: dict, out: Path) -> None:
+    """Write ``clutter_solvable.json`` and ``.md`` under ``out``."""
     solved = [r for r in rows if r['retrievable']]
     decided = [r for r in rows if r['retrievable'] is not None]
     share = len(solved) / len(decided) if decided else 0.0
@@ -103,6 +105,7 @@ def _why(rows: list[dict]) -> list[str]:
 
 
 def main() -> None:
+    """Generate the scenes, check each one, write the results."""
     args = parse()
     jobs = [(n, d, s) for n in args.sizes for d in args.densities for s in range(args.seeds)]
     meta = {

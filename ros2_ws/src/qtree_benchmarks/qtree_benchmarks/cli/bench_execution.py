@@ -46,6 +46,7 @@ TARGET_DISTURBANCES = ('offset_0.05rad_j2', 'latency_50ms', 'velocity_0.7x')
 
 
 def main() -> int:
+    """Run the execution benchmark; exit code 0 when every target is met."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--scenarios', nargs='+', default=['s1', 's2', 's3'])
     parser.add_argument('--quick', action='store_true', help='first relocation per scene only')

@@ -36,6 +36,7 @@ TARGET_FALSE_INFEASIBLE = 0.05  # [-]
 
 
 def parse() -> argparse.Namespace:
+    """Command-line options."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--scenes', type=int, default=10, help='generated scenes (≥ 1)')
     parser.add_argument('--per-scene', type=int, default=30, help='questions per scene (≥ 1)')
@@ -51,6 +52,7 @@ def parse() -> argparse.Namespace:
 
 
 def write(answers: list, meta: dict) -> dict:
+    """Write ``false_infeasible.json`` and ``.md``; return the summary written."""
     result = {**summary(answers), 'meta': meta, 'rows': rows(answers)}
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / 'false_infeasible.json').write_text(json.dumps(result, indent=1, default=str) + '\n')
@@ -59,6 +61,7 @@ def write(answers: list, meta: dict) -> dict:
 
 
 def markdown(r: dict) -> str:
+    """The Markdown report of a summary ``r``."""
     m = r['meta']
     ok_fi = 'met' if r['false_infeasible_rate'] <= TARGET_FALSE_INFEASIBLE else 'MISSED'
     ok_ff = 'met' if r['false_feasible'] == 0 else 'MISSED'
@@ -93,6 +96,7 @@ def markdown(r: dict) -> str:
 
 
 def main() -> None:
+    """Ask every question of the planner and of the reference, write the results."""
     args = parse()
     jobs = [scene_questions(i, args.per_scene, args.seed) for i in range(args.scenes)]
     meta = {

@@ -107,6 +107,7 @@ def write(rows: list[dict], policy: str) -> None:
 
 
 def main() -> int:
+    """Run the demo on each scenario through the ROS graph, write ``live_demo.*``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--scenarios', nargs='+', default=['s1', 's2', 's3'])
     parser.add_argument('--policy', default='H-EG', help='the demo default: H-EG')

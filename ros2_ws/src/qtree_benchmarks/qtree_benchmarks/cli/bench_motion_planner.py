@@ -41,6 +41,7 @@ TARGETS = {  # issue #13
 
 
 def main() -> None:
+    """Run the motion-planner benchmark, write ``motion_planner.*``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--quick', action='store_true', help='short run (a few minutes)')
     parser.add_argument('--no-profile', action='store_true', help='skip the cProfile run')
@@ -151,7 +152,8 @@ def main() -> None:
 def _ask_again(scene, scene_results: list, out: dict) -> None:
     """Ask the cached questions of ``scene`` again in reverse order in a fresh planner (#29:
     the answer must not depend on what was asked before); count answers whose reason or
-    trajectory changed (TIMEOUT answers are not cached, so never compared)."""
+    trajectory changed (TIMEOUT answers are not cached, so never compared).
+    """
     again = MotionPlanner(scene)
     again.blockers.annotate = lambda result, *_: result
     for (relocated, object_id), first in reversed(scene_results):
@@ -206,7 +208,8 @@ def _step_note(summary: dict) -> str:
 
 def _step_summary(step_times: list[tuple[float, float, float]]) -> dict:
     """Median wall time per STPIK step [µs] and its split (solve with the step bound,
-    kinematics without collision, collision queries), over every planner step of the run."""
+    kinematics without collision, collision queries), over every planner step of the run.
+    """
     if not step_times:
         return {'steps': 0}
     times = np.asarray(step_times) * 1e6

@@ -50,6 +50,7 @@ ONE_OBJECT_EVENTS = ('moved_into_path', 'moved_out_of_way', 'object_added')  # t
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    """Command-line options of ``argv`` (``sys.argv[1:]`` when None)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
         '--scenarios', nargs='+', default=['s1', 's2', 's3', 'gen10', 'gen15', 'gen20']
@@ -71,7 +72,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def learned_scene(name: str, max_seeds: int = 8):
     """(planner, sequence, first training) of a named or generated (``gen<N>``) scene whose
-    retrieval BLOCKER-SEARCH finds; generated scenes try seeds 0, 1, … until one is found."""
+    retrieval BLOCKER-SEARCH finds; generated scenes try seeds 0, 1, … until one is found.
+    """
     match = GENERATED.match(name)
     candidates = (
         (generate_clutter(int(match.group(1)), DENSITY, seed) for seed in range(max_seeds))
@@ -88,6 +90,7 @@ def learned_scene(name: str, max_seeds: int = 8):
 
 
 def markdown(data: dict) -> str:
+    """The Markdown report of the benchmark ``data``."""
     lines = [
         '# Replanning after a world change (#32 item 6)',
         '',
@@ -116,6 +119,7 @@ def markdown(data: dict) -> str:
 
 
 def plot(data: dict, path: Path) -> None:
+    """Plot the replanning figures of ``data`` to the PNG ``path``."""
     import matplotlib
 
     matplotlib.use('Agg')
@@ -150,6 +154,7 @@ def plot(data: dict, path: Path) -> None:
 
 
 def targets_met(outcomes: list, rows: list[dict]) -> dict:
+    """Whether each target of #32 item 6 is met by the ``outcomes`` and ``rows``."""
     possible = [o for o in outcomes if o.solvable]
     one_object = [o for o in outcomes if o.event in ONE_OBJECT_EVENTS]
     retrieved = sum(o.retrieved for o in possible) / len(possible) if possible else None
@@ -173,6 +178,7 @@ def targets_met(outcomes: list, rows: list[dict]) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the replanning benchmark; exit code 0 when it finished."""
     args = parse_args(argv)
     outcomes, skipped, scenes = [], [], {}
     total = len(args.scenarios) * len(args.events) * args.runs

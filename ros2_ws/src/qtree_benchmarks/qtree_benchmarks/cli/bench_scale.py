@@ -43,6 +43,7 @@ NOTES = [
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    """Command-line options of ``argv`` (``sys.argv[1:]`` when None)."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--n', type=int, nargs='+', default=[10, 20, 30, 50], help='obstacles N')
     parser.add_argument('--densities', type=float, nargs='+', default=[0.15, 0.3])
@@ -131,6 +132,7 @@ def write(records: list[dict], meta: dict, out: Path, stem: str) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run (or merge) the scale benchmark, write ``scale*.json/.md/.png``."""
     args = parse_args(argv)
     if args.merge:
         records, meta = merged(args.merge)

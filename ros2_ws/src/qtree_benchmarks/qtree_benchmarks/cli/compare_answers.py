@@ -1,4 +1,4 @@
-"""Dump, and compare, every motion-planner answer the exact search asks on S1-S3.
+r"""Dump, and compare, every motion-planner answer the exact search asks on S1-S3.
 
 Runs the exact breadth-first search of ``tests/test_scenario_levels.py`` with the in-process
 planner, then writes every ``(relocated set, object) -> (feasible, reason)`` answer it asked, and
@@ -7,7 +7,7 @@ two dumps (e.g. before / after a planner change) compare on the same questions.
 
 Example:
     ./qtree run python scripts/compare_answers.py --out /tmp/after.json --keys /tmp/before.json
-    ./qtree run python scripts/compare_answers.py --compare /tmp/before.json /tmp/after.json \\
+    ./qtree run python scripts/compare_answers.py --compare /tmp/before.json /tmp/after.json \
         --json benchmarks/results/hand_model_answers.json
 """
 

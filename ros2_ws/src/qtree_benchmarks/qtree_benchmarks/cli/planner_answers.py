@@ -26,6 +26,7 @@ from qtree_benchmarks.motion import answers
 
 
 def main() -> int:
+    """Record the planner answers of S1-S3, or compare two records."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest='command', required=True)
     record = sub.add_parser('record', help='run the exact searches and write their answers')

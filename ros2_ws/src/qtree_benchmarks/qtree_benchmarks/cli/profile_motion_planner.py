@@ -91,6 +91,7 @@ def compare(a: str, b: str) -> None:
 
 
 def main() -> None:
+    """Profile typical checks, write the profiles under ``benchmarks/results/profiles``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--tag', default='after')
     parser.add_argument('--episodes', type=int, default=3)

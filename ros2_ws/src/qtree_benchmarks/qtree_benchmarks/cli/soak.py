@@ -46,6 +46,7 @@ DEFAULT_OUTPUT = REPO_ROOT / 'benchmarks' / 'results' / 'soak.json'
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    """Command-line options of ``argv`` (``sys.argv[1:]`` when None)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--runs', type=int, default=10, help='runs of the node tests (>= 0)')
     parser.add_argument('--tests', nargs='+', default=list(NODE_TESTS), help='test paths')
@@ -116,6 +117,7 @@ def fresh_clone_main(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the soak, write ``soak.json``; exit code 0 when every run passed."""
     args = parse_args(argv)
     if args.fresh_clone:
         return fresh_clone_main(args)

@@ -40,7 +40,8 @@ MAX_SETS = 400  # exact-search budget on the generated scenes [-]
 def load(name: str) -> Scenario:
     """An installed scenario (``'s1'``) or a generated one, ``'gen_<objects>_<density>_<seed>'``
     (:func:`qtree_scene.generator.generate_clutter`, ``layout='uniform'``: the scenes the
-    committed answer keys were taken on, fixed so that planner changes stay comparable)."""
+    committed answer keys were taken on, fixed so that planner changes stay comparable).
+    """
     if name.startswith('gen_'):
         _, objects, density, seed = name.split('_')
         return generate_clutter(int(objects), float(density), int(seed), layout='uniform')
@@ -119,7 +120,8 @@ def compare(before: dict, after: dict) -> dict:
 
 def fastest(records: list[dict]) -> dict:
     """The first record with, per question, the smallest CPU time over ``records`` (runs of the
-    same code; the minimum filters out interference of other processes)."""
+    same code; the minimum filters out interference of other processes).
+    """
     out = {
         name: {**part, 'cpu_s': dict(part['cpu_s'])}
         for name, part in scenarios(records[0]).items()
@@ -134,7 +136,8 @@ def fastest(records: list[dict]) -> dict:
 
 def timing_summary(record: dict) -> dict:
     """Median / p95 CPU ms of the feasible and reached-STPIK checks of a record (and the
-    feasible checks' median wall ms per stage)."""
+    feasible checks' median wall ms per stage).
+    """
     feasible, reached, stages = [], [], {}
     for part in scenarios(record).values():
         for key, seconds in part['cpu_s'].items():

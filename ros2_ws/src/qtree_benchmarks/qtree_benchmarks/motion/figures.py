@@ -61,7 +61,7 @@ def optimal_level(planner: MotionPlanner, max_sets: int) -> tuple[int | None, in
 
 
 def profile_breakdown(scenario: Scenario, max_sets: int) -> dict:
-    """cProfile of a fresh planner's exact search; own time grouped by where it is spent."""
+    """CProfile of a fresh planner's exact search; own time grouped by where it is spent."""
     planner = MotionPlanner(scenario)
     profiler = cProfile.Profile()
     profiler.enable()

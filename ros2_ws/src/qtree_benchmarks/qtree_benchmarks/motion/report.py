@@ -121,7 +121,8 @@ def render(s: dict) -> str:
 
 def speed_section(speed: dict | None) -> list[str]:
     """Markdown lines of the #13 speed work: the same questions on ``main`` and on the faster
-    code, CPU time (``scripts/planner_answers.py compare --out``), answers compared."""
+    code, CPU time (``scripts/planner_answers.py compare --out``), answers compared.
+    """
     if not speed:
         return []
     before, after = speed['before'], speed['after']

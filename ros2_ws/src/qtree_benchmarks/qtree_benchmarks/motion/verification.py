@@ -37,7 +37,10 @@ def placed_objects(
     them stand on their slot with their original yaw because their own answer is not known.
 
     Args:
+        scenario: the scene before any relocation.
+        order: ids in the order they are relocated (slot 0, 1, ...).
         answers: feasible results by ``(frozenset(relocated before), object id)``.
+        robot: the robot model that replays an answer's release pose (None: slots only).
     """
     out, approximated = [], 0
     for index, object_id in enumerate(order):

@@ -81,7 +81,8 @@ def plots(rows: list[dict], records: list[dict], out: Path, prefix: str = '') ->
 
 def sweep_plot(rows: list[dict], out: Path, prefix: str = 'sweep_') -> list[str]:
     """Per scenario, episodes / MP calls / first optimal episode of every variant (bars, std),
-    the paper's value of the policy as a black tick, the exact search's runs as a dashed line."""
+    the paper's value of the policy as a black tick, the exact search's runs as a dashed line.
+    """
     plt = _pyplot()
     scenarios = sorted({r['scenario'] for r in rows})
     learners = [r for r in rows if r['policy'] != 'RND']

@@ -78,7 +78,8 @@ class RunOutcome:
 
 def learn(planner: Any, prefix: Sequence[str], remaining: Iterable[str], target: str) -> Any:
     """BLOCKER-SEARCH for the rest of a retrieval after ``prefix``; its result (real planner
-    runs in ``planner_runs``: answers served from ``planner``'s cache do not count)."""
+    runs in ``planner_runs``: answers served from ``planner``'s cache do not count).
+    """
     oracle = MotionPlannerOracle(planner.scenario, planner)
     result = blocker_search(tuple(remaining), target, PrefixOracle(oracle, prefix), SEARCH)
     return dataclasses.replace(result, planner_runs=oracle.planner_runs)
@@ -114,7 +115,8 @@ def place(
     """The scene with ``obj`` (new or moved, by id) at the roomiest of ``spots`` (x, y) [m]: the
     valid spot farthest from every other footprint (at least :data:`GAP_M`), as a person puts an
     object down where it fits rather than squeezed against its neighbours (a hand needs room for
-    its fingers); None when no spot is valid."""
+    its fingers); None when no spot is valid.
+    """
     others = [o for o in scenario.objects if o.id != obj.id and o.role != 'static']
 
     def room(xy: tuple[float, float]) -> float:
@@ -135,7 +137,8 @@ def spots_in_front(
 ) -> list[tuple[float, float]]:
     """Spots (x, y) [m] between ``of`` and the robot's base, up to 15 cm in front of it and 4 cm
     aside: where an object of footprint radius ``radius_m`` stands in the way of a side approach
-    to ``of``."""
+    to ``of``.
+    """
     xy = np.asarray(of.position[:2], dtype=float)
     towards = -xy / np.linalg.norm(xy)
     side = np.array([-towards[1], towards[0]])
@@ -224,7 +227,8 @@ def apply_event(
 
 def reverify(planner: Any, relocated: Iterable[str], object_id: str, result: Any) -> int:
     """Clearance violations of the feasible answer ``result`` checked again in ``planner``'s
-    scene (its verifier, the bodies standing during that relocation) [-]."""
+    scene (its verifier, the bodies standing during that relocation) [-].
+    """
     from stpik_motion_planner.verifier import Carried
 
     obj = planner.scenario.object(object_id)
@@ -236,7 +240,8 @@ def reverify(planner: Any, relocated: Iterable[str], object_id: str, result: Any
 
 def is_solvable(planner: Any, prefix: Sequence[str], remaining: Sequence[str], target: str):
     """Whether a retrieval exists after ``prefix`` (exact set search, cache shared with the
-    re-plan); None when the search budget ran out."""
+    re-plan); None when the search budget ran out.
+    """
     oracle = MemoOracle(MotionPlannerOracle(planner.scenario, planner))
     try:
         found = solve_exact(
@@ -253,7 +258,8 @@ def decide_solvable(
     """Whether a retrieval still exists after the event, and what decided it: ``'re-plan'`` (it
     found one), ``'exact'`` (the exact set search within :data:`EXACT_MAX_SETS`), else
     ``'certificate'`` (BLOCKER-SEARCH's certified ``unsolvable``: sound under monotone
-    feasibility) or ``'none'``."""
+    feasibility) or ``'none'``.
+    """
     if result.status == 'optimal':
         return True, 're-plan'
     exact = is_solvable(planner, prefix, remaining, target)
@@ -271,6 +277,10 @@ def run_event(
     first training's answers); None when the event cannot happen in this scene.
 
     Args:
+        old: the planner of the first training, its cache full.
+        sequence: the learned sequence, the target last.
+        event: the kind of world change (a key of the benchmark's events).
+        seed: seed of the step and the change drawn.
         make_planner: ``make_planner(scenario)`` → a MotionPlanner (the benchmark's config).
     """
     from stpik_motion_planner.answer_reuse import carry_over

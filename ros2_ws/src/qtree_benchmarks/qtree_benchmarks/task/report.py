@@ -146,7 +146,8 @@ def markdown(rows: list[dict], meta: dict) -> str:
 
 def sweep_markdown(rows: list[dict], meta: dict) -> str:
     """The paper sweep: per scenario every variant in one table, the exact row, the claims per
-    reading."""
+    reading.
+    """
     lines = [
         "# Q-Tree benchmark: every reading of the paper's open points (paper sweep)",
         '',

@@ -225,7 +225,8 @@ def run_all(
 ) -> list:
     """Run the tasks (in-process, process pool or Ray) with a progress bar; records in task
     order. ``fn`` (default :func:`run_task`) runs one task in a worker and must be importable
-    by name (``scripts/bench_scale.py`` passes ``qtree_benchmarks.task.scale.run_scene``)."""
+    by name (``scripts/bench_scale.py`` passes ``qtree_benchmarks.task.scale.run_scene``).
+    """
     from tqdm import tqdm
 
     fn = fn or run_task

@@ -93,7 +93,8 @@ class SceneOracle:
 
     def clear_zone(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """Answer of a verification query (:func:`~.oracle.ask_clear`), cached under
-        :func:`clear_key`, timed."""
+        :func:`clear_key`, timed.
+        """
         key = clear_key(relocated, object_id)
         if key not in self.cleared:
             start = time.perf_counter()
@@ -355,7 +356,8 @@ def markdown(rows: list[dict], meta: dict) -> str:
 
 def ratio_lines(records: list[dict]) -> list[str]:
     """BLOCKER-SEARCH vs exact on the scenes where the exact search finished, per N: planner-run
-    ratio and whether its level always matched."""
+    ratio and whether its level always matched.
+    """
     lines = ['| N | scenes exact finished | BLOCKER-SEARCH / exact planner runs | same level |']
     lines.append('|---|---|---|---|')
     for n in sorted({r['n_obstacles'] for r in records}):

@@ -118,7 +118,8 @@ def sweep_variants(
     policies: tuple[str, ...] = SWEEP_POLICIES, windows: tuple[int, ...] = SWEEP_WINDOWS
 ) -> list[Variant]:
     """Every combination of readings that changes a policy's numbers, each once, in table
-    order (policy, then rule, coin, window)."""
+    order (policy, then rule, coin, window).
+    """
     seen: dict[Variant, None] = {}
     for policy in policies:
         for rule in HLRND_RULES:
