@@ -470,7 +470,7 @@ def client_graph(
 
 
 @pytest.fixture
-def g(client_graph: ClientGraph) -> ClientGraph:
+def graph(client_graph: ClientGraph) -> ClientGraph:
     """The module's client graph with every node alive (restarted if an earlier case killed it)."""
     client_graph.revive()
     return client_graph

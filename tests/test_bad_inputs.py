@@ -4,7 +4,7 @@ One graph (simulator on s1, motion planner, task planner: ``GRAPH_NODES``, serve
 ``client_graph`` fixture of conftest.py) runs for the whole module in a private ROS domain. Each
 case sends one bad input and asserts the exact reason code or message fragment, then that the
 node it hit is still alive and answering a valid request. A node that dies on a case fails that
-case only: the ``g`` fixture (conftest.py) restarts dead nodes before the next case (the crash
+case only: the ``graph`` fixture (conftest.py) restarts dead nodes before the next case (the crash
 log is kept beside the restart's log and quoted in the failure).
 
 Families: RelocateObject requests, RetrieveTarget goals, node parameters (``ros2 param set``
@@ -75,22 +75,22 @@ RELOCATE_CASES = [
     [case[1:] for case in RELOCATE_CASES],
     ids=[case[0] for case in RELOCATE_CASES],
 )
-def test_relocate_object_bad_request(g, object_id, relocated, execute, code, fragment) -> None:
-    q_before = g.q.copy()
-    response = g.relocate(object_id, relocated, execute)
+def test_relocate_object_bad_request(graph, object_id, relocated, execute, code, fragment) -> None:
+    q_before = graph.q.copy()
+    response = graph.relocate(object_id, relocated, execute)
     assert not response.feasible
     assert response.reason == code, response.message[:300]
     assert fragment in response.message, response.message[:300]
     assert not response.trajectory.points, 'a rejected request carries no trajectory'
     if execute:  # nothing was sent to the arm
-        g.spin_until(lambda: False, 0.3)
-        np.testing.assert_allclose(g.q, q_before, atol=1e-9)
-    g.assert_alive('motion_planner_node')
+        graph.spin_until(lambda: False, 0.3)
+        np.testing.assert_allclose(graph.q, q_before, atol=1e-9)
+    graph.assert_alive('motion_planner_node')
 
 
 # --- RetrieveTarget ----------------------------------------------------------------------------
-# qtree_task_planner.goal: every goal is accepted, an invalid one is aborted with INVALID_GOAL and
-# a message naming the field.
+# qtree_task_planner.goal_checks: every goal is accepted, an invalid one is aborted with
+# INVALID_GOAL and a message naming the field.
 GOAL_CASES = [
     ('unknown policy', {'policy': 'DQN'}, 'policy'),
     ('empty policy', {'policy': ''}, 'policy'),
@@ -118,38 +118,38 @@ GOAL_CASES = [
 @pytest.mark.parametrize(
     ('fields', 'named'), [c[1:] for c in GOAL_CASES], ids=[c[0] for c in GOAL_CASES]
 )
-def test_retrieve_target_bad_goal(g, fields, named) -> None:
+def test_retrieve_target_bad_goal(graph, fields, named) -> None:
     from action_msgs.msg import GoalStatus
     from qtree_msgs.action import RetrieveTarget
 
-    status, result = g.goal(**fields)
+    status, result = graph.goal(**fields)
     assert status == GoalStatus.STATUS_ABORTED
     assert not result.success
     assert result.error_code == RetrieveTarget.Result.INVALID_GOAL, (
         f'error_code={result.error_code} message={result.message!r}'
     )
     assert named in result.message, result.message
-    g.assert_alive('task_planner_node')
+    graph.assert_alive('task_planner_node')
 
 
-def test_retrieve_target_second_goal_while_busy(g) -> None:
+def test_retrieve_target_second_goal_while_busy(graph) -> None:
     from action_msgs.msg import GoalStatus
     from qtree_msgs.action import RetrieveTarget
 
-    assert g.action.wait_for_server(timeout_sec=20.0)
+    assert graph.action.wait_for_server(timeout_sec=20.0)
     long_goal = RetrieveTarget.Goal(
         policy='LRND', max_episodes=1_000_000, steady_episodes=1_000_000, feedback_every=1
     )
     feedback: list[Any] = []
-    first = g.wait(g.action.send_goal_async(long_goal, feedback_callback=feedback.append))
-    assert g.spin_until(lambda: bool(feedback), 30.0), 'the first goal never trained'
-    status, result = g.goal()
+    first = graph.wait(graph.action.send_goal_async(long_goal, feedback_callback=feedback.append))
+    assert graph.spin_until(lambda: bool(feedback), 30.0), 'the first goal never trained'
+    status, result = graph.goal()
     assert status == GoalStatus.STATUS_ABORTED
     assert result.error_code == RetrieveTarget.Result.INVALID_GOAL and 'busy' in result.message
-    g.wait(first.cancel_goal_async())
-    response = g.wait(first.get_result_async(), 30.0)
+    graph.wait(first.cancel_goal_async())
+    response = graph.wait(first.get_result_async(), 30.0)
     assert response.result.error_code == RetrieveTarget.Result.CANCELED
-    g.assert_alive('task_planner_node')
+    graph.assert_alive('task_planner_node')
 
 
 # --- Parameters (``ros2 param set`` through the parameter services) ----------------------------
@@ -191,7 +191,7 @@ PARAMETER_CASES = [
     [c[1:] for c in PARAMETER_CASES],
     ids=[c[0] for c in PARAMETER_CASES],
 )
-def test_bad_parameter_is_rejected(g, tmp_path, executable, name, value, fragment) -> None:
+def test_bad_parameter_is_rejected(graph, tmp_path, executable, name, value, fragment) -> None:
     from rcl_interfaces.srv import GetParameters, SetParameters
     from rclpy.parameter import Parameter
 
@@ -200,19 +200,19 @@ def test_bad_parameter_is_rejected(g, tmp_path, executable, name, value, fragmen
     elif value == _BAD_RADIUS:
         value = str(_write_yaml(tmp_path, _s1_with(('objects', 0, 'radius'), HUGE_INT)))
     node_name = GRAPH_NODES[executable][1]
-    setter = g.node.create_client(SetParameters, f'/{node_name}/set_parameters')
-    getter = g.node.create_client(GetParameters, f'/{node_name}/get_parameters')
-    before = g.call(getter, GetParameters.Request(names=[name])).values
+    setter = graph.node.create_client(SetParameters, f'/{node_name}/set_parameters')
+    getter = graph.node.create_client(GetParameters, f'/{node_name}/get_parameters')
+    before = graph.call(getter, GetParameters.Request(names=[name])).values
     request = SetParameters.Request(parameters=[Parameter(name, value=value).to_parameter_msg()])
-    response = g.call(setter, request, 30.0, executable)
+    response = graph.call(setter, request, 30.0, executable)
     assert len(response.results) == 1
     assert not response.results[0].successful
     assert fragment in response.results[0].reason, response.results[0].reason
-    after = g.call(getter, GetParameters.Request(names=[name])).values
+    after = graph.call(getter, GetParameters.Request(names=[name])).values
     assert after == before, 'a rejected value must leave the parameter unchanged'
-    g.node.destroy_client(setter)
-    g.node.destroy_client(getter)
-    g.assert_alive(executable)
+    graph.node.destroy_client(setter)
+    graph.node.destroy_client(getter)
+    graph.assert_alive(executable)
 
 
 # --- Scenario files: load_scenario (in-process) and /jaco2_sim/reset_scene ---------------------
@@ -294,13 +294,13 @@ def test_load_scenario_rejects(tmp_path, content, fragment) -> None:
 @pytest.mark.parametrize(
     ('content', 'fragment'), [c[1:] for c in SCENARIO_CASES], ids=[c[0] for c in SCENARIO_CASES]
 )
-def test_reset_scene_rejects(g, tmp_path, content, fragment) -> None:
-    response = g.reset(_scenario_argument(tmp_path, content))
+def test_reset_scene_rejects(graph, tmp_path, content, fragment) -> None:
+    response = graph.reset(_scenario_argument(tmp_path, content))
     assert not response.success
     assert fragment in response.message, response.message
-    g.spin_until(lambda: False, 0.2)
-    assert g.scene_name == 's1', 'a rejected scenario must leave the scene unchanged'
-    g.assert_alive('sim_node')
+    graph.spin_until(lambda: False, 0.2)
+    assert graph.scene_name == 's1', 'a rejected scenario must leave the scene unchanged'
+    graph.assert_alive('sim_node')
 
 
 # --- /joint_trajectory messages to the sim -----------------------------------------------------
@@ -377,31 +377,31 @@ def _names(kind: str | None) -> list[str]:
 
 
 @pytest.mark.parametrize('case', list(TRAJECTORY_CASES))
-def test_bad_trajectory_is_rejected_and_sim_keeps_publishing(g, case) -> None:
+def test_bad_trajectory_is_rejected_and_sim_keeps_publishing(graph, case) -> None:
     names, points, fragment = TRAJECTORY_CASES[case]
-    assert g.reset('s1').success  # home, no reference
-    g.spin_until(lambda: False, 0.2)
-    q_before, count, mark = g.q.copy(), g.states, g.log_mark('sim_node')
-    g.trajectory_pub.publish(_trajectory(points, _names(names)))
-    text = g.wait_log('sim_node', mark, fragment)
+    assert graph.reset('s1').success  # home, no reference
+    graph.spin_until(lambda: False, 0.2)
+    q_before, count, mark = graph.q.copy(), graph.states, graph.log_mark('sim_node')
+    graph.trajectory_pub.publish(_trajectory(points, _names(names)))
+    text = graph.wait_log('sim_node', mark, fragment)
     assert 'trajectory rejected' in text
-    assert g.spin_until(lambda: g.states >= count + 25, 5.0), 'the sim stopped publishing'
-    np.testing.assert_allclose(g.q, q_before, atol=1e-9, err_msg='a rejected trajectory moved')
-    g.assert_alive('sim_node')
+    assert graph.spin_until(lambda: graph.states >= count + 25, 5.0), 'the sim stopped publishing'
+    np.testing.assert_allclose(graph.q, q_before, atol=1e-9, err_msg='a rejected trajectory moved')
+    graph.assert_alive('sim_node')
 
 
 @pytest.mark.parametrize('value', [0.3, -1e300], ids=['slightly below', 'minus 1e300'])
-def test_trajectory_beyond_joint_limits_is_clamped(g, value) -> None:
+def test_trajectory_beyond_joint_limits_is_clamped(graph, value) -> None:
     from jaco2_description.model import arm_limits
 
-    assert g.reset('s1').success
-    mark = g.log_mark('sim_node')
-    g.trajectory_pub.publish(_trajectory([(0.5, _home_plus(j4=value), [])], _arm()))
-    g.wait_log('sim_node', mark, 'clamped')
+    assert graph.reset('s1').success
+    mark = graph.log_mark('sim_node')
+    graph.trajectory_pub.publish(_trajectory([(0.5, _home_plus(j4=value), [])], _arm()))
+    graph.wait_log('sim_node', mark, 'clamped')
     goal = np.array(_home_plus(j4=float(arm_limits().lower[3])))
-    assert g.spin_until(lambda: np.max(np.abs(g.q - goal)) < 1e-3, 5.0), g.q
-    assert np.all(np.isfinite(g.q))
-    g.assert_alive('sim_node')
+    assert graph.spin_until(lambda: np.max(np.abs(graph.q - goal)) < 1e-3, 5.0), graph.q
+    assert np.all(np.isfinite(graph.q))
+    graph.assert_alive('sim_node')
 
 
 # --- MCAP files for scripts/replay.py ----------------------------------------------------------

@@ -1,6 +1,6 @@
 """Limits: huge requests, a 200-object scene and a 100 000-point trajectory, in time and memory.
 
-One sim + motion planner graph for the module (``GRAPH_NODES``; the ``g`` fixture of
+One sim + motion planner graph for the module (``GRAPH_NODES``; the ``graph`` fixture of
 conftest.py). Each case measures the answer time and the resident memory (VmRSS from
 ``/proc/<pid>/status``, summed over the node's process tree) of the node before and after, and
 prints the figures (``-s``) for docs/RELIABILITY.md. No node documents a size limit on these
@@ -58,19 +58,19 @@ def _report(label: str, node: NodeProcess, before_mb: float, seconds: float) -> 
     ],
     ids=['unknown', 'duplicates', 'empty'],
 )
-def test_huge_relocated_list(g: ClientGraph, label, object_id, relocated, code) -> None:
+def test_huge_relocated_list(graph: ClientGraph, label, object_id, relocated, code) -> None:
     from qtree_msgs.srv import RelocateObject
 
-    before = rss_mb(g.nodes[PLANNER].process.pid)
-    mark = len(g.nodes[PLANNER].log_text())
+    before = rss_mb(graph.nodes[PLANNER].process.pid)
+    mark = len(graph.nodes[PLANNER].log_text())
     request = RelocateObject.Request(object_id=object_id, relocated_ids=relocated)
-    response, seconds = g.timed_call(g.relocate_client, request, 30.0)
-    growth = _report(f'RelocateObject with {label}', g.nodes[PLANNER], before, seconds)
-    logged = g.nodes[PLANNER].log_text()[mark:]
+    response, seconds = graph.timed_call(graph.relocate_client, request, 30.0)
+    growth = _report(f'RelocateObject with {label}', graph.nodes[PLANNER], before, seconds)
+    logged = graph.nodes[PLANNER].log_text()[mark:]
     print(f'[limits]   message {len(response.message)} chars, log {len(logged)} chars')
     assert response.reason == code, response.message[:300]
     assert seconds < 5.0 and growth < RSS_GROWTH_MB
-    ok, _ = g.timed_call(g.relocate_client, RelocateObject.Request(object_id='O2'), 30.0)
+    ok, _ = graph.timed_call(graph.relocate_client, RelocateObject.Request(object_id='O2'), 30.0)
     assert ok.feasible, ok.message
     assert len(response.message) <= MESSAGE_CHARS, (
         f'the answer echoes the request: {len(response.message)} chars'
@@ -78,7 +78,7 @@ def test_huge_relocated_list(g: ClientGraph, label, object_id, relocated, code) 
     assert len(logged) <= 10 * MESSAGE_CHARS, f'one request logged {len(logged)} chars'
 
 
-def test_scene_with_200_objects(g: ClientGraph, tmp_path: Path) -> None:
+def test_scene_with_200_objects(graph: ClientGraph, tmp_path: Path) -> None:
     from qtree_msgs.srv import RelocateObject, ResetScene
     from qtree_scene.generator import generate_clutter
     from qtree_scene.scenario import dump_scenario
@@ -86,17 +86,21 @@ def test_scene_with_200_objects(g: ClientGraph, tmp_path: Path) -> None:
     path = tmp_path / 'clutter200.yaml'
     path.write_text(dump_scenario(generate_clutter(200, 0.3, seed=0)))
     sim_before, mp_before = (
-        rss_mb(g.nodes[SIM].process.pid),
-        rss_mb(g.nodes[PLANNER].process.pid),
+        rss_mb(graph.nodes[SIM].process.pid),
+        rss_mb(graph.nodes[PLANNER].process.pid),
     )
-    mark = len(g.nodes[PLANNER].log_text())
-    response, seconds = g.timed_call(g.reset_client, ResetScene.Request(scenario=str(path)), 30.0)
+    mark = len(graph.nodes[PLANNER].log_text())
+    response, seconds = graph.timed_call(
+        graph.reset_client, ResetScene.Request(scenario=str(path)), 30.0
+    )
     assert response.success, response.message
-    assert g.spin_until(lambda: len(g.scene.objects) == 202, 10.0)
+    assert graph.spin_until(lambda: len(graph.scene.objects) == 202, 10.0)
     start = time.monotonic()
-    assert g.spin_until(lambda: 'planner rebuilt' in g.nodes[PLANNER].log_text()[mark:], 30.0)
+    assert graph.spin_until(
+        lambda: 'planner rebuilt' in graph.nodes[PLANNER].log_text()[mark:], 30.0
+    )
     rebuilt_s = time.monotonic() - start + seconds
-    _report('reset_scene to 200 objects', g.nodes[SIM], sim_before, seconds)
+    _report('reset_scene to 200 objects', graph.nodes[SIM], sim_before, seconds)
     times = {}
     for object_id, relocated in [
         ('O1', []),
@@ -105,23 +109,25 @@ def test_scene_with_200_objects(g: ClientGraph, tmp_path: Path) -> None:
         ('T', [f'O{i}' for i in range(1, 201)]),
     ]:
         request = RelocateObject.Request(object_id=object_id, relocated_ids=relocated)
-        answer, times[object_id, len(relocated)] = g.timed_call(g.relocate_client, request, 60.0)
+        answer, times[object_id, len(relocated)] = graph.timed_call(
+            graph.relocate_client, request, 60.0
+        )
         assert answer.reason in {0, *range(201, 210), 301}, answer.message
     growth = _report(
         f'200 objects: planner rebuilt in {rebuilt_s:.2f} s, 4 checks',
-        g.nodes[PLANNER],
+        graph.nodes[PLANNER],
         mp_before,
         sum(times.values()),
     )
     print(f'[limits]   check times [s]: { {k: round(v, 3) for k, v in times.items()} }')
     assert max(times.values()) < 5.0 + 5.0  # time_limit_s + transport
     assert growth < RSS_GROWTH_MB
-    assert g.timed_call(g.reset_client, ResetScene.Request(scenario='s1'), 30.0)[0].success
-    assert g.spin_until(lambda: len(g.scene.objects) == 7, 10.0)
+    assert graph.timed_call(graph.reset_client, ResetScene.Request(scenario='s1'), 30.0)[0].success
+    assert graph.spin_until(lambda: len(graph.scene.objects) == 7, 10.0)
 
 
 @pytest.mark.parametrize('n', [10_000, 100_000])
-def test_long_trajectory(g: ClientGraph, n: int) -> None:
+def test_long_trajectory(graph: ClientGraph, n: int) -> None:
     from builtin_interfaces.msg import Duration
     from jaco2_description.model import ARM_JOINTS, HOME
     from qtree_msgs.srv import ResetScene
@@ -138,28 +144,28 @@ def test_long_trajectory(g: ClientGraph, n: int) -> None:
                 time_from_start=Duration(sec=int(t), nanosec=round((t % 1) * 1e9) % 10**9),
             )
         )
-    before = rss_mb(g.nodes[SIM].process.pid)
-    mark = len(g.nodes[SIM].log_text())
-    count = len(g.state_times)
-    assert g.spin_until(lambda: g.trajectory_pub.get_subscription_count() > 0, 20.0)
+    before = rss_mb(graph.nodes[SIM].process.pid)
+    mark = len(graph.nodes[SIM].log_text())
+    count = len(graph.state_times)
+    assert graph.spin_until(lambda: graph.trajectory_pub.get_subscription_count() > 0, 20.0)
     start = time.monotonic()
-    g.trajectory_pub.publish(msg)
+    graph.trajectory_pub.publish(msg)
     # documented limit: sim_node's max_trajectory_points (default 10 000); longer is rejected
     expected = (
         f'following a trajectory of {n} points'
         if n <= 10_000
         else 'more than max_trajectory_points = 10000'
     )
-    accepted = g.spin_until(lambda: expected in g.nodes[SIM].log_text()[mark:], 60.0)
+    accepted = graph.spin_until(lambda: expected in graph.nodes[SIM].log_text()[mark:], 60.0)
     seconds = time.monotonic() - start
-    g.spin_until(lambda: False, 1.0)
-    growth = _report(f'trajectory of {n} points', g.nodes[SIM], before, seconds)
-    gaps = np.diff(g.state_times[max(count - 1, 0) :])
+    graph.spin_until(lambda: False, 1.0)
+    growth = _report(f'trajectory of {n} points', graph.nodes[SIM], before, seconds)
+    gaps = np.diff(graph.state_times[max(count - 1, 0) :])
     largest_gap = float(gaps.max()) if len(gaps) else math.inf
     print(f'[limits]   largest /joint_states gap {largest_gap:.2f} s')
-    assert accepted, g.nodes[SIM].log_text()[mark:][-2000:]
-    assert g.nodes[SIM].alive()
+    assert accepted, graph.nodes[SIM].log_text()[mark:][-2000:]
+    assert graph.nodes[SIM].alive()
     assert growth < RSS_GROWTH_MB
-    g.trajectory_pub.publish(JointTrajectory(joint_names=list(ARM_JOINTS)))  # stop
-    assert g.timed_call(g.reset_client, ResetScene.Request(scenario='s1'), 30.0)[0].success
+    graph.trajectory_pub.publish(JointTrajectory(joint_names=list(ARM_JOINTS)))  # stop
+    assert graph.timed_call(graph.reset_client, ResetScene.Request(scenario='s1'), 30.0)[0].success
     assert largest_gap < MAX_STATE_GAP_S, f'/joint_states stopped for {largest_gap:.2f} s'

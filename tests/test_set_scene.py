@@ -80,29 +80,31 @@ def sim_and_planner(launch: Any, ros_node: Any) -> dict[str, Any]:
 
 
 def test_set_scene_then_bad_scenes_keep_it(sim_and_planner: dict[str, Any], ros_node: Any):
-    g = sim_and_planner
-    mark = len(g['planner'].log_text())
-    ok = ros_node.call(g['set'], SetScene.Request(scene=scene_msg(load_scenario('s2'))))
+    nodes = sim_and_planner
+    mark = len(nodes['planner'].log_text())
+    ok = ros_node.call(nodes['set'], SetScene.Request(scene=scene_msg(load_scenario('s2'))))
     assert ok.success, ok.message
-    assert ros_node.spin_until(lambda: g['scenes'][-1].scenario_name == 's2', 10.0)
-    assert len(g['scenes'][-1].objects) == 12
-    assert ros_node.spin_until(lambda: "scene 's2'" in g['planner'].log_text()[mark:], 30.0)
-    answer = ros_node.call(g['relocate'], RelocateObject.Request(object_id='T'), 60.0)
+    assert ros_node.spin_until(lambda: nodes['scenes'][-1].scenario_name == 's2', 10.0)
+    assert len(nodes['scenes'][-1].objects) == 12
+    assert ros_node.spin_until(lambda: "scene 's2'" in nodes['planner'].log_text()[mark:], 30.0)
+    answer = ros_node.call(nodes['relocate'], RelocateObject.Request(object_id='T'), 60.0)
     assert answer.reason not in (Reason.NO_SCENE, Reason.INVALID_SCENE), answer.message
-    assert ros_node.call(g['relocate'], RelocateObject.Request(object_id='O10')).reason != (
+    assert ros_node.call(nodes['relocate'], RelocateObject.Request(object_id='O10')).reason != (
         Reason.UNKNOWN_OBJECT
     )
     for case, edit, fragment in BAD:
-        published, states = len(g['scenes']), g['states']
-        response = ros_node.call(g['set'], SetScene.Request(scene=_s2_edited(edit)))
+        published, states = len(nodes['scenes']), nodes['states']
+        response = ros_node.call(nodes['set'], SetScene.Request(scene=_s2_edited(edit)))
         assert not response.success, case
         assert response.message.startswith('SetScene: ') and fragment in response.message, (
             case,
             response.message,
         )
-        assert ros_node.spin_until(lambda s=states: g['states'] > s + 5, 5.0), case
-        assert len(g['scenes']) == published and g['scenes'][-1].scenario_name == 's2', case
-        assert g['sim'].alive(), case
+        assert ros_node.spin_until(lambda s=states: nodes['states'] > s + 5, 5.0), case
+        assert len(nodes['scenes']) == published and nodes['scenes'][-1].scenario_name == 's2', (
+            case
+        )
+        assert nodes['sim'].alive(), case
 
 
 def test_planner_takes_a_scene_from_any_publisher(launch: Any, ros_node: Any) -> None:

@@ -34,22 +34,22 @@ from qtree_msgs.action import RetrieveTarget
 from qtree_scene.changes import clutter_objects, scene_changes
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 
-from qtree_task_planner.exceptions import (
-    InvalidParameterError,
-    InvalidScenarioError,
-    OracleUnavailableError,
-)
-from qtree_task_planner.goal import GoalSettings, settings_from_goal
-from qtree_task_planner.messages import (
+from qtree_task_planner.conversions import (
     feedback_msg,
     holds_object,
     movable_from_scene,
     relocated_ids,
 )
-from qtree_task_planner.planners import make_trainer
+from qtree_task_planner.exceptions import (
+    InvalidParameterError,
+    InvalidScenarioError,
+    OracleUnavailableError,
+)
+from qtree_task_planner.goal_checks import GoalSettings, settings_from_goal
 from qtree_task_planner.replanning import PrefixOracle, combined, kept_prefix
 from qtree_task_planner.ros_oracle import RosPlannerOracle
 from qtree_task_planner.sequence_execution import CANCELED, FAILED, OK, SequenceExecution
+from qtree_task_planner.trainers import make_trainer
 from qtree_task_planner.training import STOP_CANCELLED
 
 Result = RetrieveTarget.Result

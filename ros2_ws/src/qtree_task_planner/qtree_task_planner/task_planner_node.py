@@ -22,6 +22,7 @@ from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
+from qtree_task_planner.conversions import result_msg, stats_msg, tree_msg
 from qtree_task_planner.goal_run import (
     TIMEOUTS,
     GoalContext,
@@ -30,7 +31,6 @@ from qtree_task_planner.goal_run import (
     run_goal,
     timeout_descriptor,
 )
-from qtree_task_planner.messages import result_msg, stats_msg, tree_msg
 from qtree_task_planner.sequence_execution import SequenceExecution
 
 STATS_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # bursts of episodes

@@ -12,7 +12,7 @@ import pytest
 from qtree_msgs.action import RetrieveTarget
 from qtree_scene.message import scene_msg
 from qtree_scene.scenario import load_scenario
-from qtree_task_planner.goal import settings_from_goal
+from qtree_task_planner.goal_checks import settings_from_goal
 from qtree_task_planner.goal_run import GoalContext, execute_with_replans, scene_watch, train
 from qtree_task_planner.oracle import TableOracle
 from qtree_task_planner.replanning import (

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from qtree_task_planner.exceptions import InvalidParameterError
-from qtree_task_planner.planners import canonical_planner_name
 from qtree_task_planner.replanning import DEFAULT_MAX_REPLANS, MAX_REPLANS
+from qtree_task_planner.trainers import canonical_planner_name
 from qtree_task_planner.training import TrainingConfig
 
 FLOAT_FIELDS = ('alpha', 'gamma', 'epsilon0', 'epsilon_min', 'beta')  # every float64 goal field

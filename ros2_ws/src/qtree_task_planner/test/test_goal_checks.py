@@ -4,7 +4,7 @@ import math
 
 import pytest
 from qtree_task_planner.exceptions import InvalidParameterError, UnknownPolicyError
-from qtree_task_planner.goal import FLOAT_FIELDS, settings_from_goal
+from qtree_task_planner.goal_checks import FLOAT_FIELDS, settings_from_goal
 
 
 def test_defaults_are_the_papers(make_goal) -> None:

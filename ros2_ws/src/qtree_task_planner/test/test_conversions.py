@@ -4,8 +4,8 @@ import pytest
 from builtin_interfaces.msg import Time
 from qtree_msgs.action import RetrieveTarget
 from qtree_msgs.msg import ObjectState, Scene
+from qtree_task_planner.conversions import movable_from_scene, result_msg, tree_msg
 from qtree_task_planner.exceptions import InvalidScenarioError
-from qtree_task_planner.messages import movable_from_scene, result_msg, tree_msg
 from qtree_task_planner.testing import TOY_MOVABLE, toy_oracle
 from qtree_task_planner.training import TrainingConfig, train
 from qtree_task_planner.tree import QTree

@@ -2,15 +2,15 @@
 
 import pytest
 from qtree_task_planner.exceptions import UnknownPolicyError
-from qtree_task_planner.goal import settings_from_goal
+from qtree_task_planner.goal_checks import settings_from_goal
 from qtree_task_planner.oracle import TableOracle
-from qtree_task_planner.planners import (
+from qtree_task_planner.testing import TOY_MOVABLE, TOY_OPTIMAL_LEVEL, TOY_REQUIREMENTS
+from qtree_task_planner.trainers import (
     BLOCKER_SEARCH,
     BlockerSearchTrainer,
     canonical_planner_name,
     make_trainer,
 )
-from qtree_task_planner.testing import TOY_MOVABLE, TOY_OPTIMAL_LEVEL, TOY_REQUIREMENTS
 from qtree_task_planner.training import STOP_CANCELLED, QTreeTrainer, TrainingConfig
 
 
