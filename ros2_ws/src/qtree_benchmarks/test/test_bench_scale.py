@@ -48,7 +48,16 @@ def _meta(records) -> dict:
 def test_script_rejects_bad_flags() -> None:
     from qtree_benchmarks.cli import bench_scale
 
-    for argv in (['--scenes', '0'], ['--densities', '0.9'], ['--workers', '0']):
+    bad = (
+        ['--scenes', '0'],
+        ['--densities', '0.9'],
+        ['--workers', '0'],
+        ['--layouts', 'packed_rows,heap'],
+        ['--layouts', ''],
+        ['--grasp-families', 'side,side'],
+        ['--grasp-families', 'from_below'],
+    )
+    for argv in bad:
         with pytest.raises(SystemExit):
             bench_scale.parse_args(argv)
 
@@ -70,3 +79,52 @@ def test_merge_writes_one_report_from_runs_in_parts(tmp_path) -> None:
     (tmp_path / 'bad.json').write_text('{"rows": []}')
     with pytest.raises(SystemExit, match='not a bench_scale JSON'):
         bench_scale.main(['--merge', str(tmp_path / 'bad.json'), '--out', str(tmp_path)])
+
+
+def test_layouts_and_grasp_families_name_every_record_and_row() -> None:
+    from qtree_benchmarks.cli import bench_scale
+
+    args = bench_scale.parse_args(
+        ['--layouts', 'packed_ring,accessible', '--grasp-families', 'side,top']
+    )
+    assert args.layouts == ('packed_ring', 'accessible') and args.grasp_families == ('side', 'top')
+    records = []
+    for layout in ('packed_ring', 'accessible'):
+        task = ScaleTask(
+            8, 0.3, 0, oracle='synthetic', methods=('exact',), layout=layout,
+            grasp_families=('side', 'top'),
+        )  # fmt: skip
+        records += run_scene(task)
+    assert [r['layout'] for r in records] == ['packed_ring', 'accessible']
+    assert all(
+        r['grasp_families'] == ['side', 'top'] and r['too_wide_grasps'] == 0 for r in records
+    )
+    rows = summarize(records)
+    assert [(r['layout'], r['method']) for r in rows] == [
+        ('accessible', 'exact'),
+        ('packed_ring', 'exact'),
+    ]
+    assert '| packed_ring | side+top | 8 |' in markdown(rows, _meta(records))
+
+
+def test_grasp_counts_flag_a_grasp_wider_than_the_hand() -> None:
+    from types import SimpleNamespace
+
+    from qtree_benchmarks.task.scale import grasp_counts
+    from qtree_scene.scene import ObjectSpec
+
+    box = ObjectSpec('B', 'obstacle', 'box', (0.6, 0.0, 0.1), 0.0, size=(0.06, 0.15, 0.2))
+
+    def result(yaw, family):
+        return SimpleNamespace(feasible=True, approach_yaw=yaw, grasp_family=family)
+
+    cache = SimpleNamespace(items=lambda: [
+        ((frozenset(), 'B'), result(0.0, 'side')),  # fingers close along y: 150 mm across
+        ((frozenset({'X'}), 'B'), result(1.5708, 'top')),  # along x: 60 mm across
+        ((frozenset({'Y'}), 'B'), SimpleNamespace(feasible=False)),
+    ])  # fmt: skip
+    inner = SimpleNamespace(
+        planner=SimpleNamespace(cache=cache), scenario=SimpleNamespace(object=lambda _: box)
+    )
+    assert grasp_counts(inner) == {'side_grasps': 1, 'top_grasps': 1, 'too_wide_grasps': 1}
+    assert grasp_counts(object()) == {'side_grasps': 0, 'top_grasps': 0, 'too_wide_grasps': 0}

@@ -20,6 +20,9 @@ import sys
 import time
 from pathlib import Path
 
+from qtree_scene.generator import LAYOUTS
+from stpik_motion_planner.grasps import GRASP_FAMILIES
+
 from qtree_benchmarks.cli.benchmark import RESULTS
 from qtree_benchmarks.task.runner import run_all
 from qtree_benchmarks.task.scale import (
@@ -28,6 +31,7 @@ from qtree_benchmarks.task.scale import (
     markdown,
     plot,
     run_scene,
+    scene_total,
     summarize,
 )
 
@@ -51,6 +55,18 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--seed', type=int, default=0, help='seed of the first scene')
     parser.add_argument('--methods', nargs='+', default=list(METHODS), choices=METHODS)
     parser.add_argument('--oracle', choices=['planner', 'synthetic'], default='planner')
+    parser.add_argument(
+        '--layouts',
+        type=_names(LAYOUTS, '--layouts'),
+        default=('accessible',),
+        help=f'comma-separated generator layouts ({", ".join(LAYOUTS)})',
+    )
+    parser.add_argument(
+        '--grasp-families',
+        type=_names(GRASP_FAMILIES, '--grasp-families'),
+        default=('side',),
+        help="comma-separated grasp families of the planner (side: the paper's; side,top)",
+    )
     parser.add_argument('--workers', type=int, default=1, help='processes (default: one core)')
     parser.add_argument('--ray', metavar='ADDRESS', help="Ray address, or 'local'")
     parser.add_argument('--exact-max-runs', type=int, default=3000)
@@ -76,6 +92,21 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     if not all(0.0 < d <= 0.4 for d in args.densities):
         parser.error('--densities must be in (0, 0.4]')
     return args
+
+
+def _names(known: tuple[str, ...], flag: str):
+    """Argparse type: a comma-separated list of names out of ``known``, without repeats."""
+
+    def parse(text: str) -> tuple[str, ...]:
+        names = tuple(n.strip() for n in text.split(',') if n.strip())
+        unknown = [n for n in names if n not in known]
+        if not names or unknown or len(set(names)) != len(names):
+            raise argparse.ArgumentTypeError(
+                f'{flag}: {text!r}: expected distinct names out of {", ".join(known)}'
+            )
+        return names
+
+    return parse
 
 
 def merged(paths: list[Path]) -> tuple[list[dict], dict]:
@@ -152,7 +183,10 @@ def main(argv: list[str] | None = None) -> int:
             learner_time_s=args.learner_time_s,
             search_max_runs=args.search_max_runs,
             search_time_s=args.search_time_s,
+            layout=layout,
+            grasp_families=args.grasp_families,
         )
+        for layout in args.layouts
         for n in args.n
         for density in args.densities
         for i in range(args.scenes)
@@ -161,7 +195,11 @@ def main(argv: list[str] | None = None) -> int:
     records = [r for scene in per_scene for r in scene]
     meta = {
         'oracle': args.oracle,
-        'generator_layout': 'accessible',  # generate_clutter's default
+        'layouts': list(args.layouts),
+        'grasp_families': list(args.grasp_families),
+        'too_wide_grasps': scene_total(records, 'too_wide_grasps'),
+        'top_grasps': scene_total(records, 'top_grasps'),
+        'side_grasps': scene_total(records, 'side_grasps'),
         'scenes': args.scenes,
         'workers': args.workers,
         'exact_max_runs': args.exact_max_runs,

@@ -49,6 +49,9 @@ class ScaleTask:
         learner_time_s: wall budget of each learner [s].
         search_max_runs: planner-run budget of BLOCKER-SEARCH.
         search_time_s: wall budget of BLOCKER-SEARCH [s].
+        layout: ``generate_clutter``'s layout (``'accessible'``, ``'uniform'``, ``'packed_*'``).
+        grasp_families: the planner's grasp families (``('side',)`` the paper's, or with
+            ``'top'``).
     """
 
     n_obstacles: int
@@ -62,6 +65,8 @@ class ScaleTask:
     learner_time_s: float = 10.0
     search_max_runs: int = 3000
     search_time_s: float = 120.0
+    layout: str = 'accessible'
+    grasp_families: tuple[str, ...] = ('side',)
 
 
 def clear_key(relocated: tuple[str, ...], object_id: str) -> SetKey:
@@ -192,10 +197,34 @@ def build_scene(task: ScaleTask) -> tuple[tuple[str, ...], str, Any]:
         return obstacles, 'T', TableOracle(requirements)
     from qtree_scene.generator import generate_clutter
     from qtree_task_planner.oracle import MotionPlannerOracle
+    from stpik_motion_planner.config import PlannerConfig
+    from stpik_motion_planner.planner import MotionPlanner
 
-    scenario = generate_clutter(task.n_obstacles, task.density, task.seed)
+    scenario = generate_clutter(task.n_obstacles, task.density, task.seed, layout=task.layout)
+    planner = MotionPlanner(scenario, PlannerConfig(grasp_families=tuple(task.grasp_families)))
     obstacles = tuple(o.id for o in scenario.obstacles)
-    return obstacles, scenario.target.id, MotionPlannerOracle(scenario)
+    return obstacles, scenario.target.id, MotionPlannerOracle(scenario, planner)
+
+
+def grasp_counts(inner: Any) -> dict[str, int]:
+    """Feasible answers the planner returned on this scene, by grasp family, and how many grip
+    an object wider across the fingers, at the answer's approach yaw, than the hand opens
+    (``too_wide_grasps``: 0 since #30 item 1; a synthetic oracle has no grasps: all 0).
+    """
+    counts = {'side_grasps': 0, 'top_grasps': 0, 'too_wide_grasps': 0}
+    planner = getattr(inner, 'planner', None)
+    if planner is None:
+        return counts
+    from jaco2_description.model import HAND_OPENING_M
+    from stpik_motion_planner.hand_model import grasp_width
+
+    for (_, object_id), result in planner.cache.items():
+        if not result.feasible:
+            continue
+        counts['top_grasps' if result.grasp_family == 'top' else 'side_grasps'] += 1
+        width = grasp_width(inner.scenario.object(object_id), result.approach_yaw)
+        counts['too_wide_grasps'] += width > HAND_OPENING_M
+    return counts
 
 
 def _run_method(method: str, task: ScaleTask, obstacles, target, scene: SceneOracle) -> dict:
@@ -267,9 +296,18 @@ def run_scene(task: ScaleTask) -> list[dict]:
     records = []
     for method in task.methods:
         record = _run_method(method, task, obstacles, target, scene)
-        record.update(n_obstacles=task.n_obstacles, density=task.density, seed=task.seed)
+        record.update(
+            n_obstacles=task.n_obstacles,
+            density=task.density,
+            seed=task.seed,
+            layout=task.layout,
+            grasp_families=list(task.grasp_families),
+        )
         records.append(record)
     _score(records)
+    counts = grasp_counts(inner)  # the scene's whole cache: every method's answers
+    for record in records:
+        record.update(counts)
     return records
 
 
@@ -298,17 +336,20 @@ def _score(records: list[dict]) -> None:
 def summarize(records: list[dict]) -> list[dict]:
     """One row per (N, density, method) with the keys of issue #14."""
     rows = []
-    keys = sorted({(r['n_obstacles'], r['density'], r['method']) for r in records})
-    keys.sort(key=lambda k: (k[0], k[1], METHODS.index(k[2])))
-    for n, density, method in keys:
+    keys = sorted({(_layout(r), r['n_obstacles'], r['density'], r['method']) for r in records})
+    keys.sort(key=lambda k: (k[0], k[1], k[2], METHODS.index(k[3])))
+    for layout, n, density, method in keys:
         group = [
             r
             for r in records
-            if (r['n_obstacles'], r['density'], r['method']) == (n, density, method)
+            if (_layout(r), r['n_obstacles'], r['density'], r['method'])
+            == (layout, n, density, method)
         ]
         solvable = [r for r in group if r['reference_level'] != 0]
         rows.append(
             {
+                'layout': layout,
+                'grasp_families': sorted({f for r in group for f in _families(r)}),
                 'n_obstacles': n,
                 'density': density,
                 'method': method,
@@ -322,9 +363,24 @@ def summarize(records: list[dict]) -> list[dict]:
                 'budget_hit_share': float(np.mean([bool(r['budget_hit']) for r in group])),
                 'solvable_scenes': len(solvable),
                 'exact_finished_share': float(np.mean([r['reference'] == 'exact' for r in group])),
+                'too_wide_grasps': int(sum(r.get('too_wide_grasps', 0) for r in group)),
             }
         )
     return rows
+
+
+def scene_total(records: list[dict], key: str) -> int:
+    """Sum of a per-scene count over the scenes (every method's record of a scene holds it)."""
+    scenes = {(_layout(r), r['n_obstacles'], r['density'], r['seed']): r for r in records}
+    return int(sum(r.get(key, 0) for r in scenes.values()))
+
+
+def _layout(record: dict) -> str:
+    return record.get('layout', 'accessible')  # records of runs before #30 item 5
+
+
+def _families(record: dict) -> list[str]:
+    return record.get('grasp_families', ['side'])
 
 
 def markdown(rows: list[dict], meta: dict) -> str:
@@ -332,19 +388,24 @@ def markdown(rows: list[dict], meta: dict) -> str:
     lines = [
         '# Scale benchmark (issue #14)',
         '',
-        f'Oracle: {meta["oracle"]}; generator layout '
-        f'`{meta.get("generator_layout", "uniform")}`; {meta["scenes"]} scenes per (N, density); '
+        f'Oracle: {meta["oracle"]}; generator layouts '
+        f'`{", ".join(meta.get("layouts", [meta.get("generator_layout", "uniform")]))}`, grasp '
+        f'families `{"+".join(meta.get("grasp_families", ["side"]))}`; '
+        f'{meta["scenes"]} scenes per (layout, N, density); '
+        f'grasps wider than the hand in returned answers: {meta.get("too_wide_grasps", "n/a")}; '
         f'{meta["workers"]} worker(s); total wall time {meta["wall_time_s"]:.0f} s. '
         f'Budgets: exact {meta["exact_max_runs"]} planner runs / {meta["exact_time_s"]:g} s, '
         f'learners Ep_max {meta["learner_episodes"]} / {meta["learner_time_s"]:g} s, '
         f'BLOCKER-SEARCH {meta["search_max_runs"]} runs / {meta["search_time_s"]:g} s.',
         '',
-        '| N | density | method | solved | optimal | planner runs | wall [s] mean (max) '
-        '| episodes | budget hit | exact finished |',
-        '|---|---|---|---|---|---|---|---|---|---|',
+        '| layout | grasps | N | density | method | solved | optimal | planner runs '
+        '| wall [s] mean (max) | episodes | budget hit | exact finished |',
+        '|---|---|---|---|---|---|---|---|---|---|---|---|',
     ]
     for r in rows:
+        families = '+'.join(r.get('grasp_families', ['side']))
         lines.append(
+            f'| {r.get("layout", "accessible")} | {families} '
             f'| {r["n_obstacles"]} | {r["density"]:g} | {r["method"]} | {r["solved_share"]:.0%} '
             f'| {r["optimal_share"]:.0%} | {r["planner_runs_mean"]:.0f} '
             f'| {r["wall_s_mean"]:.2f} ({r["wall_s_max"]:.1f}) | {r["episodes_mean"]:.0f} '
@@ -369,8 +430,8 @@ def ratio_lines(records: list[dict]) -> list[str]:
                         o
                         for o in records
                         if o['method'] == 'BLOCKER-SEARCH'
-                        and (o['n_obstacles'], o['density'], o['seed'])
-                        == (n, r['density'], r['seed'])
+                        and (_layout(o), o['n_obstacles'], o['density'], o['seed'])
+                        == (_layout(r), n, r['density'], r['seed'])
                     ),
                     None,
                 )
@@ -394,13 +455,22 @@ def plot(rows: list[dict], path: Any) -> None:
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    groups = sorted({(r.get('layout', 'accessible'), r['density']) for r in rows})
+    styles = ('-', '--', ':', '-.')
     for method in METHODS:
-        for density, style in zip(sorted({r['density'] for r in rows}), ('-', '--'), strict=False):
-            sel = [r for r in rows if r['method'] == method and r['density'] == density]
+        for (layout, density), style in zip(groups, styles * len(groups), strict=False):
+            sel = [
+                r
+                for r in rows
+                if r['method'] == method
+                and r['density'] == density
+                and r.get('layout', 'accessible') == layout
+            ]
             if not sel:
                 continue
             ns = [r['n_obstacles'] for r in sel]
-            label = f'{method} (density {density:g})'
+            where = f'{layout}, ' if len({g[0] for g in groups}) > 1 else ''
+            label = f'{method} ({where}density {density:g})'
             axes[0].plot(ns, [r['planner_runs_mean'] for r in sel], style, marker='o', label=label)
             axes[1].plot(ns, [r['wall_s_mean'] for r in sel], style, marker='o', label=label)
     for ax, title in zip(axes, ('planner runs (mean)', 'wall time [s] (mean)'), strict=True):
