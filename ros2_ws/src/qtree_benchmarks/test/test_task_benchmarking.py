@@ -103,3 +103,21 @@ def test_a_planner_timeout_stops_the_benchmark_instead_of_counting_as_infeasible
     with pytest.raises(RuntimeError, match='timed out'):
         oracle.feasible(('O2',), 'T')
     assert PLANNING_TIME_LIMIT_S >= 60.0
+
+
+def test_ros_and_in_process_records_have_the_same_keys_and_reading_of_optimal() -> None:
+    from types import SimpleNamespace
+
+    from qtree_benchmarks.task.ros_runner import _record
+    from qtree_benchmarks.task.runner import Task, run_task
+
+    task = Task('s1', 'H-EG', 0, 'synthetic', 0, 20, 1.0)  # optimal level 0: no sequence at all
+    in_process = run_task(task)
+    result = SimpleNamespace(
+        sequence=(), extraction='none', episodes=20, mp_calls=3, planner_runs=3,
+        first_learned_level_episode=-1, converged=False, message='max_episodes',
+        training_time=0.1,
+    )  # fmt: skip
+    through_ros = _record(task, result, [])
+    assert list(through_ros) == list(in_process)
+    assert through_ros['optimal'] is False  # an empty answer is never "optimal" (it was, via ROS)

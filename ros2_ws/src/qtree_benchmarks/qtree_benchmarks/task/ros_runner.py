@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import time
 
-from qtree_benchmarks.task.runner import Task
+from qtree_benchmarks.task.runner import Task, training_record
 
 
 def run_ros(tasks: list[Task], timeout_s: float = 3600.0) -> list[dict]:
@@ -98,27 +98,19 @@ def _record(task: Task, result, stats: list) -> dict:
         ),
         -1,
     )
-    variant = task.variant
-    return {
-        'scenario': task.scenario,
-        'policy': task.policy,
-        'variant': variant.label,
-        'hlrnd_rule': variant.hlrnd_rule,
-        'epsilon_coin': variant.epsilon_coin,
-        'steady_episodes': variant.steady_episodes,
-        'seed': task.seed,
-        'sequence': list(result.sequence),
-        'level': len(result.sequence),
-        'optimal': len(result.sequence) == task.optimal_level,
-        'extraction': result.extraction,
-        'episodes': result.episodes,
-        'mp_calls': result.mp_calls,
-        'planner_runs_fresh': result.planner_runs,
-        'planner_runs_real': result.planner_runs,
-        'first_optimal_episode': first,
-        'first_learned_level_episode': result.first_learned_level_episode,
-        'converged': result.converged,
-        'stop_reason': result.message,
-        'wall_time_s': result.training_time,
-        'q_bar_curve': [[s.episode, s.q_bar] for s in stats[:: max(1, len(stats) // 200)]],
-    }
+    return training_record(
+        task,
+        policy=task.policy,
+        sequence=result.sequence,
+        extraction=result.extraction,
+        episodes=result.episodes,
+        mp_calls=result.mp_calls,
+        planner_runs_fresh=result.planner_runs,
+        planner_runs_real=result.planner_runs,
+        first_optimal_episode=first,
+        first_learned_level_episode=result.first_learned_level_episode,
+        converged=result.converged,
+        stop_reason=result.message,
+        wall_time_s=result.training_time,
+        q_bar_curve=[[s.episode, s.q_bar] for s in stats[:: max(1, len(stats) // 200)]],
+    )

@@ -143,30 +143,50 @@ def run_task(task: Task) -> dict:
     result = train((*obstacles, target), target, oracle, config)
     q_bar = [s.q_bar for s in result.history]
     step = max(1, len(q_bar) // 200)
+    return training_record(
+        task,
+        policy=result.policy,
+        sequence=result.sequence,
+        extraction=result.extraction,
+        episodes=result.episodes,
+        mp_calls=result.mp_calls,
+        planner_runs_fresh=result.planner_runs,
+        planner_runs_real=shared.planner_runs - runs_before,
+        first_optimal_episode=result.first_optimal_episode,
+        first_learned_level_episode=result.first_learned_level_episode,
+        converged=result.converged,
+        stop_reason=result.stop_reason,
+        wall_time_s=result.wall_time_s,
+        q_bar_curve=[[i + 1, q_bar[i]] for i in range(0, len(q_bar), step)]
+        if task.keep_curve
+        else [],
+    )
+
+
+def training_record(task: Task, *, policy: str, sequence: Any, **fields: Any) -> dict:
+    """The JSON record of one training, the same keys in process and through ROS.
+
+    Args:
+        task: the training's task (scenario, variant, seed, optimal level).
+        policy: the policy that trained.
+        sequence: the extracted sequence (the target last; empty: none).
+        fields: the training's figures (``episodes``, ``mp_calls``, ``planner_runs_fresh``,
+            ``planner_runs_real``, ``first_optimal_episode``, ``first_learned_level_episode``,
+            ``converged``, ``stop_reason``, ``wall_time_s``, ``q_bar_curve``, ``extraction``).
+    """
+    variant = task.variant
     return {
         'scenario': task.scenario,
-        'policy': result.policy,
+        'policy': policy,
         'variant': variant.label,
         'hlrnd_rule': variant.hlrnd_rule,
         'epsilon_coin': variant.epsilon_coin,
         'steady_episodes': variant.steady_episodes,
         'seed': task.seed,
-        'sequence': list(result.sequence),
-        'level': len(result.sequence),
-        'optimal': bool(result.sequence) and len(result.sequence) == task.optimal_level,
-        'extraction': result.extraction,
-        'episodes': result.episodes,
-        'mp_calls': result.mp_calls,
-        'planner_runs_fresh': result.planner_runs,
-        'planner_runs_real': shared.planner_runs - runs_before,
-        'first_optimal_episode': result.first_optimal_episode,
-        'first_learned_level_episode': result.first_learned_level_episode,
-        'converged': result.converged,
-        'stop_reason': result.stop_reason,
-        'wall_time_s': result.wall_time_s,
-        'q_bar_curve': [[i + 1, q_bar[i]] for i in range(0, len(q_bar), step)]
-        if task.keep_curve
-        else [],
+        'sequence': list(sequence),
+        'level': len(sequence),
+        'optimal': bool(sequence) and len(sequence) == task.optimal_level,  # none is never optimal
+        **fields,
     }
 
 
