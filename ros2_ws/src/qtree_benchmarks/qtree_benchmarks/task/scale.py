@@ -26,7 +26,7 @@ import numpy as np
 from qtree_task_planner.blocker_search import BlockerSearchConfig, blocker_search
 from qtree_task_planner.exact import solve_exact
 from qtree_task_planner.exceptions import BudgetExceededError, SearchLimitExceededError
-from qtree_task_planner.oracle import FeasibilityAnswer, SetKey, ask, ask_clear
+from qtree_task_planner.oracle import FeasibilityAnswer, MemoOracle, SetKey
 from qtree_task_planner.training import QTreeTrainer, TrainingConfig
 
 METHODS = ('exact', 'H-EG', 'H-EG-SET', 'BLOCKER-SEARCH')
@@ -74,20 +74,18 @@ def clear_key(relocated: tuple[str, ...], object_id: str) -> SetKey:
     return frozenset(relocated) | {CLEAR_ZONE}, object_id
 
 
-class SceneOracle:
-    """Per-scene answer cache over the real oracle, with the planning time of each answer.
+class SceneOracle(MemoOracle):
+    """Per-scene answer cache over the real oracle (a :class:`~.oracle.MemoOracle`), with the
+    planning time of each answer.
 
     Attributes:
-        answers: (frozenset(relocated), object) -> answer.
-        cost_s: planning time of each answer [s].
+        cost_s: planning time of each answer [s], by ``(frozenset(relocated), object)`` and, for
+            verification queries, by :func:`clear_key`.
         spent_s: planning time actually spent in this process [s].
     """
 
     def __init__(self, inner: Any) -> None:
-        self.inner = inner
-        self.sound_blockers = bool(getattr(inner, 'sound_blockers', False))
-        self.answers: dict[SetKey, FeasibilityAnswer] = {}
-        self.cleared: dict[SetKey, bool] = {}
+        super().__init__(inner)
         self.cost_s: dict[SetKey, float] = {}
         self.spent_s = 0.0
 
@@ -97,33 +95,25 @@ class SceneOracle:
         return hasattr(self.inner, 'clear_zone_feasible')
 
     def clear_zone(self, relocated: tuple[str, ...], object_id: str) -> bool:
-        """Answer of a verification query (:func:`~.oracle.ask_clear`), cached under
-        :func:`clear_key`, timed.
-        """
-        key = clear_key(relocated, object_id)
-        if key not in self.cleared:
-            start = time.perf_counter()
-            self.cleared[key] = ask_clear(self.inner, tuple(relocated), object_id)
-            self.cost_s[key] = time.perf_counter() - start
-            self.spent_s += self.cost_s[key]
-        return self.cleared[key]
-
-    def approach_blockers(
-        self, relocated: tuple[str, ...], object_id: str
-    ) -> tuple[frozenset[str], ...] | None:
-        """The real oracle's per-approach blockers (no planner run), or None without them."""
-        read = getattr(self.inner, 'approach_blockers', None)
-        return None if read is None else read(tuple(relocated), object_id)
+        """Answer of a verification query (:func:`~.oracle.ask_clear`), memoised, timed."""
+        return self._timed(
+            clear_key(relocated, object_id), self.clear_zone_feasible, relocated, object_id
+        )
 
     def answer(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
         """Cached answer, or one real run (timed)."""
-        key = (frozenset(relocated), object_id)
-        if key not in self.answers:
-            start = time.perf_counter()
-            self.answers[key] = ask(self.inner, tuple(relocated), object_id)
-            self.cost_s[key] = time.perf_counter() - start
-            self.spent_s += self.cost_s[key]
-        return self.answers[key]
+        return self._timed((frozenset(relocated), object_id), super().answer, relocated, object_id)
+
+    def _timed(
+        self, key: SetKey, ask_memo: Any, relocated: tuple[str, ...], object_id: str
+    ) -> Any:
+        if key in self.cost_s:
+            return ask_memo(relocated, object_id)
+        start = time.perf_counter()
+        answer = ask_memo(relocated, object_id)
+        self.cost_s[key] = time.perf_counter() - start
+        self.spent_s += self.cost_s[key]
+        return answer
 
 
 class MethodOracle:
@@ -157,7 +147,7 @@ class MethodOracle:
             self.planner_runs += 1
             self.charged_s += self.scene.cost_s[key]
             return answer
-        return self.scene.answers[key]
+        return self.scene.answer(relocated, object_id)  # memoised: no planner run
 
     def approach_blockers(
         self, relocated: tuple[str, ...], object_id: str
@@ -184,7 +174,7 @@ class MethodOracle:
             self.planner_runs += 1
             self.charged_s += self.scene.cost_s[key]
             return answer
-        return self.scene.cleared[key]
+        return self.scene.clear_zone(relocated, object_id)  # memoised: no planner run
 
 
 def build_scene(task: ScaleTask) -> tuple[tuple[str, ...], str, Any]:
