@@ -46,6 +46,7 @@ from qtree_benchmarks.task.variants import (
     DEFAULT_COIN,
     DEFAULT_RULE,
     DEFAULT_WINDOW,
+    READINGS,
     SWEEP_POLICIES,
     SWEEP_WINDOWS,
     Variant,
@@ -93,6 +94,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help='consecutive episodes eq. (11) must hold',
     )
     parser.add_argument(
+        '--reading',
+        choices=sorted(READINGS),
+        help='a named reading: sets --hlrnd-rule, --epsilon-coin and --steady-episodes '
+        "('paper': the sweep's closest to the paper's tables, see paper_fidelity.md)",
+    )
+    parser.add_argument(
         '--paper-sweep',
         action='store_true',
         help='every combination of readings, one table per scenario '
@@ -138,6 +145,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         '--tag', default='', help='names the outputs benchmark_TAG.* and TAG_*.png'
     )
     args = parser.parse_args(argv)
+    if args.reading:
+        explicit = {'--hlrnd-rule', '--epsilon-coin', '--steady-episodes', '--steady-window'}
+        if explicit & {a.split('=')[0] for a in (argv if argv is not None else sys.argv[1:])}:
+            parser.error('--reading sets the readings: give it or the reading flags, not both')
+        args.hlrnd_rule, args.epsilon_coin, args.steady_episodes = READINGS[args.reading]
     if min(args.trainings, args.workers, args.max_episodes, args.steady_episodes) <= 0:
         parser.error('--trainings, --workers, --max-episodes, --steady-episodes must be > 0')
     if min(args.sweep_windows) <= 0:
