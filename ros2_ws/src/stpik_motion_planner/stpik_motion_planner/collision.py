@@ -19,7 +19,7 @@ import numpy as np
 import pinocchio as pin
 from qtree_scene.scene import ObjectSpec
 
-from stpik_motion_planner.kernels import scene_candidates, self_candidates
+from stpik_motion_planner.kernels import replay_candidates, scene_candidates, self_candidates
 
 _REQUEST = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
 _NO_DISTANCE = sys.float_info.max  # min_distance of an empty fcl.DistanceResult [m]
@@ -114,6 +114,8 @@ class SceneWorld:
         # RobotBodies.scene_proximities.
         specs = list(self.objects.values())
         self.specs = specs  # the objects in manager order (index = object index of the culls)
+        self.index_of = {obj: i for i, obj in enumerate(specs)}  # object -> its index
+        self.recorders: list[list[SceneQuery]] = []  # logs of probe_hits (the sampler memo)
         self.ids = [obj.id for obj in specs]
         self.centres = np.array([obj.position for obj in specs], dtype=float).reshape(-1, 3)
         self.cos = np.array([math.cos(obj.yaw) for obj in specs], dtype=float)
@@ -151,11 +153,11 @@ class SceneWorld:
         the far objects out, the others get the ``fcl.distance(object, probe)`` the manager's
         callback computes, in the manager's argument order, so each distance is the same.
         """
-        if not self.ids:
-            return []
-        _, objects = scene_candidates(
-            np.ascontiguousarray(centre, dtype=float).reshape(1, 3),
-            np.array([radius + PROBE_SLACK_M]),
+        centres = np.ascontiguousarray(centre, dtype=float).reshape(1, 3)
+        radii = np.array([radius + PROBE_SLACK_M])
+        rows, objects = scene_candidates(
+            centres,
+            radii,
             _ONE_BODY,
             self.centres,
             self.cos,
@@ -164,6 +166,12 @@ class SceneWorld:
             threshold,
             False,
         )
+        if self.recorders:
+            query = SceneQuery(
+                centres, radii, threshold, False, rows, tuple(self.specs[o] for o in objects)
+            )
+            for log in self.recorders:
+                log.append(query)
         hits = []
         for o in objects:
             result = fcl.DistanceResult()
@@ -485,26 +493,65 @@ class SceneQuery:
     rows: np.ndarray
     objects: tuple[ObjectSpec, ...]
 
+
+class QueryLog:
+    """The scene queries of one computation, stacked for :meth:`replays_in` (#28 replay memo).
+
+    Attributes:
+        queries: the :class:`SceneQuery` list it was built from (n).
+        replayable: False when the queries did not cull as many bodies each (then
+            :meth:`replays_in` is False: the computation is reused in its own scene only).
+    """
+
+    def __init__(self, queries: list[SceneQuery]) -> None:
+        self.queries = queries
+        size = len(queries[0].radii) if queries else 0
+        self.replayable = all(len(q.radii) == size for q in queries)
+        self._radii = np.zeros((len(queries), size))
+        self._centres = np.zeros((len(queries), size, 3))
+        if self.replayable:
+            for i, q in enumerate(queries):
+                self._radii[i] = q.radii
+                self._centres[i] = q.centres
+        self._thresholds = np.array([q.threshold for q in queries], dtype=float)
+        self._inclusive = np.array([q.inclusive for q in queries], dtype=np.bool_)
+        self._query = np.concatenate(
+            [np.full(len(q.rows), i, dtype=np.int64) for i, q in enumerate(queries)]
+            + [np.zeros(0, dtype=np.int64)]
+        )
+        self._rows = np.concatenate([q.rows for q in queries] + [np.zeros(0, dtype=np.int64)])
+        objects = [spec for q in queries for spec in q.objects]
+        self._specs = list(dict.fromkeys(objects))  # the distinct objects met, first-met order
+        number = {spec: i for i, spec in enumerate(self._specs)}
+        self._spec_index = np.array([number[spec] for spec in objects], dtype=np.int64)
+
+    def __len__(self) -> int:
+        return len(self.queries)
+
     def replays_in(self, scene: SceneWorld) -> bool:
-        """True when the cull in ``scene`` lets through exactly the same pairs, in order."""
-        rows, objects = scene_candidates(
-            self.centres,
-            self.radii,
-            _ALL_ROWS[: len(self.radii)],
+        """True when every query's cull in ``scene`` lets through exactly the pairs it did, in
+        the same order (:func:`.kernels.replay_candidates`: each query culled as it was)."""
+        if not self.replayable:
+            return False
+        index = scene.index_of
+        where = np.array([index.get(spec, -1) for spec in self._specs], dtype=np.int64)
+        if np.any(where < 0):  # an object met is not in this scene (or not the same)
+            return False
+        query, rows, objects = replay_candidates(
+            self._centres,
+            self._radii,
+            self._thresholds,
+            self._inclusive,
             scene.centres,
             scene.cos,
             scene.sin,
             scene.half,
-            self.threshold,
-            self.inclusive,
         )
-        if len(rows) != len(self.rows) or not np.array_equal(rows, self.rows):
-            return False
-        specs = scene.specs
-        return all(specs[o] == spec for o, spec in zip(objects, self.objects, strict=True))
-
-
-_ALL_ROWS = np.arange(64, dtype=np.int64)  # body indices 0 … K−1 of a SceneQuery's bodies
+        return (
+            np.array_equal(query, self._query)
+            and np.array_equal(rows, self._rows)
+            and np.array_equal(objects, where[self._spec_index])
+        )
 
 
 def _short(link: str) -> str:

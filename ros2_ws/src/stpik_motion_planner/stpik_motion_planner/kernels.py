@@ -237,3 +237,62 @@ def solve_levels(
             break
         projector = projector - ((v * truncated) @ u.T) @ jn
     return dq
+
+
+@numba.njit(
+    numba.types.Tuple((numba.int64[::1], numba.int64[::1], numba.int64[::1]))(
+        numba.float64[:, :, ::1],
+        numba.float64[:, ::1],
+        numba.float64[::1],
+        numba.boolean[::1],
+        numba.float64[:, ::1],
+        numba.float64[::1],
+        numba.float64[::1],
+        numba.float64[:, ::1],
+    ),
+    **_OPTIONS,
+)
+def replay_candidates(
+    centres: np.ndarray,
+    radii: np.ndarray,
+    thresholds: np.ndarray,
+    inclusive: np.ndarray,
+    object_centres: np.ndarray,
+    cos_yaw: np.ndarray,
+    sin_yaw: np.ndarray,
+    half_extents: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`scene_candidates` of many logged queries against one scene, in one call.
+
+    Query i has the bodies ``centres[i]`` [m] (K, 3) with ``radii[i]`` [m] (K,) (every body
+    of the query, rows 0 … K−1), ``thresholds[i]`` [m] and ``inclusive[i]``; each is culled by
+    :func:`scene_candidates` itself, so the pairs are the ones that query would get.
+
+    Returns:
+        (query index, row, object index) of every pair let through, query-major (m,) each.
+    """
+    n, k = centres.shape[0], centres.shape[1]
+    bodies = np.arange(k)
+    total = n * k * object_centres.shape[0]
+    queries = np.empty(total, dtype=np.int64)
+    rows = np.empty(total, dtype=np.int64)
+    objects = np.empty(total, dtype=np.int64)
+    count = 0
+    for i in range(n):
+        r, o = scene_candidates(
+            centres[i],
+            radii[i],
+            bodies,
+            object_centres,
+            cos_yaw,
+            sin_yaw,
+            half_extents,
+            thresholds[i],
+            inclusive[i],
+        )
+        for j in range(r.shape[0]):
+            queries[count] = i
+            rows[count] = r[j]
+            objects[count] = o[j]
+            count += 1
+    return queries[:count], rows[:count], objects[:count]

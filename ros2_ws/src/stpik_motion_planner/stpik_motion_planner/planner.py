@@ -42,7 +42,7 @@ from stpik_motion_planner.cartesian_path import (
     approach_yaws,
     interpolate,
 )
-from stpik_motion_planner.collision import SceneWorld
+from stpik_motion_planner.collision import QueryLog, SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import (
     IkNotConverged,
@@ -81,6 +81,8 @@ HOVER_M = 0.12  # height above the pre-grasp of the descent when the joint line 
 # bottle taken 29 mm deep was 4.8 mm from finger 1 on the way out; the fingers narrow toward
 # the palm). HAND_OPENING_M has its own 5 mm per side already [m].
 TOP_GRASP_ROOM_M = 0.005
+SAMPLED_PER_KEY = 8  # sampled paths kept per approach (different scenes) [-]
+SAMPLED_KEYS = 50_000  # approaches remembered before the memo starts afresh [-]
 
 
 class MotionPlanner:
@@ -113,6 +115,8 @@ class MotionPlanner:
         # Proves the executor's stop distance on every pair, the whole carried object included.
         self.verifier = TrajectoryVerifier(self.robot, clearance_m=STOP_CLEARANCE_M)
         self.cache = FeasibilityCache()
+        # Sampled Cartesian paths by approach, with their probes' logs (:meth:`_sample`).
+        self._sampled: dict[tuple, list] = {}
         self.blockers = BlockerFinder(self)
         self.home_q = np.asarray(scenario.home, dtype=float)
         self.home_pose = pin.SE3(self.robot.ee_pose(self.home_q))
@@ -326,6 +330,60 @@ class MotionPlanner:
         slot_yaw: float,
         failures: list,
     ) -> CartesianPath | None:
+        """The Cartesian path of one approach (:meth:`_sample_path`), remembered (#28).
+
+        The path depends on the scene through the probes of ``sampler`` (corridor, palm ball)
+        and the height of the tallest movable object only: a path sampled before with the same
+        tallest height is reused when each of its probes' culls lets through the same objects
+        in this scene (:class:`~.collision.QueryLog`), as the STPIK results are
+        (:meth:`.robust_stpik.RobustStpik._remembered`).
+        """
+        config = self.config
+        key = (
+            obj,
+            approach,
+            np.asarray(slot, dtype=float).tobytes(),
+            float(slot_yaw),
+            max((o.top_z for o in scene.objects.values() if o.role != 'static'), default=None),
+            tuple(getattr(config, f.name) for f in dataclasses.fields(config)),
+        )
+        worlds = (sampler.scene, sampler.movable)
+        objects = tuple(scene.objects.values())
+        if len(self._sampled) > SAMPLED_KEYS:
+            self._sampled.clear()
+        entries = self._sampled.setdefault(key, [])
+        for seen, logs, path, found in entries:
+            if seen == objects or all(
+                log.replays_in(world) for log, world in zip(logs, worlds, strict=True)
+            ):
+                failures.extend(_copy_error(err) for err in found)
+                return path
+        logs: tuple[list, list] = ([], [])
+        for log, world in zip(logs, worlds, strict=True):
+            world.recorders.append(log)
+        found: list = []
+        try:
+            path = self._sample_path(sampler, scene, obj, approach, slot, slot_yaw, found)
+        finally:
+            for world in worlds:
+                world.recorders.pop()
+        failures.extend(found)
+        replay = tuple(QueryLog(log) for log in logs)
+        entries.append((objects, replay, path, tuple(_copy_error(err) for err in found)))
+        del entries[:-SAMPLED_PER_KEY]
+        return path
+
+    def _sample_path(
+        self,
+        sampler: CartesianSampler,
+        scene: SceneWorld,
+        obj: ObjectSpec,
+        approach: Approach,
+        slot: np.ndarray,
+        slot_yaw: float,
+        failures: list,
+    ) -> CartesianPath | None:
+        """Sample the Cartesian path of ``approach``, or append its failure and return None."""
         c = self.config
         yaw, top = approach.yaw, approach.family == 'top'
         where = f'{approach.family} grasp at yaw {yaw:.2f} rad' if top else f'yaw {yaw:.2f} rad'
@@ -641,6 +699,14 @@ class MotionPlanner:
             approach_yaw=path.approach_yaw,
             grasp_family=path.grasp_family,
         )
+
+
+def _copy_error(err: MotionPlannerError) -> MotionPlannerError:
+    """A copy of ``err`` with its own arguments (a remembered failure is never changed)."""
+    again = type(err).__new__(type(err))
+    again.__dict__.update(err.__dict__)
+    again.args = err.args
+    return again
 
 
 def _since(start: float) -> float:

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from stpik_motion_planner.collision import SceneQuery, SceneWorld
+from stpik_motion_planner.collision import QueryLog, SceneQuery, SceneWorld
 from stpik_motion_planner.exceptions import MotionPlannerError, PlanningTimeout
 from stpik_motion_planner.rrt_connect import RrtConnect, question_seed
 from stpik_motion_planner.stpik import Stpik, joint_segment
@@ -55,14 +55,14 @@ class _Outcome:
 
     Attributes:
         scene: the scene's objects it was computed in.
-        queries: its scene queries (None: too many kept, reused in ``scene`` only).
+        queries: its scene queries (None: too many to keep, reused in ``scene`` only).
         ok: True for a returned value, False for a raised planner error.
         value: the joint array [rad] (or None) returned, or the error raised.
         args: the error's original arguments (its message).
     """
 
     scene: tuple
-    queries: list[SceneQuery] | None
+    queries: QueryLog | None
     ok: bool
     value: object
     args: tuple
@@ -70,7 +70,7 @@ class _Outcome:
     @property
     def size(self) -> int:
         """Scene queries held [-] (at least 1, for the memo's budget)."""
-        return max(1, len(self.queries or ()))
+        return max(1, len(self.queries) if self.queries is not None else 0)
 
     def again(self) -> np.ndarray | None:
         """The value again (a copy), or raise a copy of the error with its original message."""
@@ -122,12 +122,12 @@ class RobustStpik(Stpik):
         objects = tuple(scene.objects.values())
         for outcome in self._memo.get(key, ()):
             if outcome.scene == objects or (
-                outcome.queries is not None and all(q.replays_in(scene) for q in outcome.queries)
+                outcome.queries is not None and outcome.queries.replays_in(scene)
             ):
                 self._memo.move_to_end(key)
                 self.memo_hits += 1
                 for log in self.bodies.recorders:  # an enclosing computation's queries
-                    log.extend(outcome.queries or ())
+                    log.extend(outcome.queries.queries if outcome.queries is not None else ())
                 return outcome.again()
         log: list[SceneQuery] = []
         self.bodies.recorders.append(log)
@@ -136,18 +136,21 @@ class RobustStpik(Stpik):
         except PlanningTimeout:
             raise
         except MotionPlannerError as err:
-            self._keep(key, _Outcome(objects, log, False, err, err.args))
+            self._keep(key, objects, log, False, err, err.args)
             raise
         finally:
             self.bodies.recorders.pop()
         copy = None if value is None else np.array(value, copy=True)
-        self._keep(key, _Outcome(objects, log, True, copy, ()))
+        self._keep(key, objects, log, True, copy, ())
         return value
 
-    def _keep(self, key: tuple, outcome: _Outcome) -> None:
-        """Remember ``outcome`` under ``key``, within :data:`MEMO_QUERIES` (oldest dropped)."""
-        if len(outcome.queries) > MEMO_ENTRY_QUERIES:  # reused in its own scene only
-            outcome = dataclasses.replace(outcome, queries=None)
+    def _keep(
+        self, key: tuple, scene: tuple, log: list[SceneQuery], ok: bool, value, args: tuple
+    ) -> None:
+        """Remember an outcome under ``key``, within :data:`MEMO_QUERIES` (oldest dropped);
+        one of more than :data:`MEMO_ENTRY_QUERIES` queries is reused in its own scene only."""
+        queries = QueryLog(log) if len(log) <= MEMO_ENTRY_QUERIES else None
+        outcome = _Outcome(scene, queries, ok, value, args)
         entries = self._memo.setdefault(key, [])
         self._memo.move_to_end(key)
         entries.append(outcome)

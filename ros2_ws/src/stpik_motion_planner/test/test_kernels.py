@@ -10,6 +10,7 @@ from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.kernels import (
     chain_placements,
+    replay_candidates,
     scene_candidates,
     self_candidates,
     solve_levels,
@@ -165,3 +166,28 @@ def test_may_activate_is_false_only_where_a_task_gives_no_row(robot, make_scenar
             assert task.may_activate(k) or rows == 0
             activated[task.name] += bool(rows)
     assert all(activated.values()), activated
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(SEEDS)
+def test_replay_candidates_are_each_querys_scene_candidates(seed):
+    """#28 replay memo: the batched cull gives, per logged query, the pairs of its own cull."""
+    rng = np.random.default_rng(seed)
+    n, k = 5, 4
+    centres = rng.uniform(-0.6, 0.6, (n, k, 3))
+    radii = rng.uniform(0.0, 0.12, (n, k))
+    thresholds = rng.uniform(-0.05, 0.3, n)
+    inclusive = rng.uniform(size=n) < 0.5
+    objects = rng.uniform(-0.6, 0.6, (6, 3))
+    yaw = rng.uniform(-np.pi, np.pi, 6)
+    half = rng.uniform(0.01, 0.1, (6, 3))
+    cos, sin = np.cos(yaw), np.sin(yaw)
+    query, rows, objs = replay_candidates(
+        centres, radii, thresholds, inclusive, objects, cos, sin, half
+    )
+    for i in range(n):
+        r, o = scene_candidates(
+            centres[i], radii[i], np.arange(k), objects, cos, sin, half, thresholds[i],
+            bool(inclusive[i]),
+        )  # fmt: skip
+        assert np.array_equal(rows[query == i], r) and np.array_equal(objs[query == i], o)
