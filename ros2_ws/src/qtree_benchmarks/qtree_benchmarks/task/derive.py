@@ -13,11 +13,6 @@ from typing import Any
 from qtree_benchmarks.task.variants import Variant
 
 
-def _variant(record: dict) -> Variant:
-    return Variant(record['policy'], record['hlrnd_rule'], record['epsilon_coin'],
-                   int(record['steady_episodes']))  # fmt: skip
-
-
 def select(data: dict, variants: list[Variant], scenarios: list[str]) -> tuple[list[dict], dict]:
     """The records of ``variants`` on ``scenarios`` and the scenario info for them.
 
@@ -29,12 +24,12 @@ def select(data: dict, variants: list[Variant], scenarios: list[str]) -> tuple[l
     """
     wanted = set(variants)
     records = [r for r in data['records']
-               if r['scenario'] in scenarios and _variant(r) in wanted]  # fmt: skip
+               if r['scenario'] in scenarios and Variant.of_record(r) in wanted]  # fmt: skip
     info: dict[str, Any] = {}
     for name in scenarios:
         if name not in data['meta']['scenarios']:
             raise ValueError(f'scenario {name!r} is not in the JSON')
-        present = {_variant(r) for r in records if r['scenario'] == name}
+        present = {Variant.of_record(r) for r in records if r['scenario'] == name}
         missing = wanted - present
         if missing:
             raise ValueError(f'{name}: no records of {sorted(v.label for v in missing)}')

@@ -15,7 +15,7 @@ import itertools
 from typing import Any
 
 from qtree_benchmarks.task.paper import PAPER, PAPER_POLICIES, PAPER_XI
-from qtree_benchmarks.task.variants import EPSILON_COINS, HLRND_RULES, NOT_APPLICABLE
+from qtree_benchmarks.task.variants import EPSILON_COINS, HLRND_RULES, Variant
 
 METRICS = ('episodes', 'mp_calls')  # Tables 1-3 columns compared (index in PAPER's tuples)
 CLOSE = 0.30  # a cell is close to the paper when |ours / paper - 1| <= CLOSE [-]
@@ -27,18 +27,9 @@ Reading = tuple[str, str, int]  # (hlrnd_rule, epsilon_coin, steady_episodes)
 
 def summary_row(rows: list[dict], scenario: str, policy: str, reading: Reading) -> dict | None:
     """The summary row of ``policy`` on ``scenario`` under ``reading`` (None: not run)."""
-    rule, coin, window = reading
-    want = {
-        'LRND': (NOT_APPLICABLE, NOT_APPLICABLE),
-        'H-LRND': (rule, NOT_APPLICABLE),
-        'H-EG': (rule, coin),
-    }[policy]
+    want = Variant.make(policy, *reading)
     for row in rows:
-        where = (row['scenario'], row['policy'], row['steady_episodes'])
-        if (
-            where == (scenario, policy, window)
-            and (row['hlrnd_rule'], row['epsilon_coin']) == want
-        ):
+        if row['scenario'] == scenario and Variant.of_record(row) == want:
             return row
     return None
 
@@ -107,20 +98,10 @@ def optimal_shares(records: list[dict], reading: Reading, scenarios: list[str]) 
     """Per scenario and policy: trainings, optimal through eq. (19) itself, optimal only through
     the best-known fallback.
     """
-    rule, coin, window = reading
     out = []
     for scenario, policy in itertools.product(scenarios, PAPER_POLICIES):
-        want = {
-            'LRND': (NOT_APPLICABLE, NOT_APPLICABLE),
-            'H-LRND': (rule, NOT_APPLICABLE),
-            'H-EG': (rule, coin),
-        }[policy]
-        group = [
-            r
-            for r in records
-            if (r['scenario'], r['policy'], r['steady_episodes']) == (scenario, policy, window)
-            and (r['hlrnd_rule'], r['epsilon_coin']) == want
-        ]
+        want = Variant.make(policy, *reading)
+        group = [r for r in records if r['scenario'] == scenario and Variant.of_record(r) == want]
         if not group:
             continue
         eq19 = sum(r['optimal'] and r['extraction'] == 'eq19' for r in group)

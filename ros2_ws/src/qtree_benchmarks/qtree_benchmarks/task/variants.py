@@ -89,6 +89,12 @@ class Variant:
             window if uses_window(policy) else 0,
         )
 
+    @classmethod
+    def of_record(cls, record: dict) -> Variant:
+        """The variant a benchmark record or summary row was trained with."""
+        return cls(record['policy'], record['hlrnd_rule'], record['epsilon_coin'],
+                   int(record['steady_episodes']))  # fmt: skip
+
     @property
     def is_default(self) -> bool:
         """Every reading that applies is the default one (the committed Tables 1-3)."""
