@@ -17,6 +17,16 @@ class MotionPlannerError(Exception):
     reason: Reason = Reason.INVALID_REQUEST
 
 
+def copy_error(err: MotionPlannerError, args: tuple | None = None) -> MotionPlannerError:
+    """A copy of ``err`` (same type and attributes) with ``args`` (default: its own), so a
+    remembered failure raised again is never changed by its next catcher (#28).
+    """
+    again = type(err).__new__(type(err))
+    again.__dict__.update(err.__dict__)
+    again.args = err.args if args is None else args
+    return again
+
+
 class InvalidRequest(MotionPlannerError):  # noqa: N818
     """A request or scene cannot be planned for (unknown id, duplicates, NaN pose...)."""
 

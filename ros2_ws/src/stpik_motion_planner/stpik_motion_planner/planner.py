@@ -56,6 +56,7 @@ from stpik_motion_planner.exceptions import (
     SceneCollision,
     SelfCollision,
     VerificationFailed,
+    copy_error,
 )
 from stpik_motion_planner.grasps import (
     Approach,
@@ -356,7 +357,7 @@ class MotionPlanner:
             if seen == objects or all(
                 log.replays_in(world) for log, world in zip(logs, worlds, strict=True)
             ):
-                failures.extend(_copy_error(err) for err in found)
+                failures.extend(copy_error(err) for err in found)
                 return path
         logs: tuple[list, list] = ([], [])
         for log, world in zip(logs, worlds, strict=True):
@@ -369,7 +370,7 @@ class MotionPlanner:
                 world.recorders.pop()
         failures.extend(found)
         replay = tuple(QueryLog(log) for log in logs)
-        entries.append((objects, replay, path, tuple(_copy_error(err) for err in found)))
+        entries.append((objects, replay, path, tuple(copy_error(err) for err in found)))
         del entries[:-SAMPLED_PER_KEY]
         return path
 
@@ -699,14 +700,6 @@ class MotionPlanner:
             approach_yaw=path.approach_yaw,
             grasp_family=path.grasp_family,
         )
-
-
-def _copy_error(err: MotionPlannerError) -> MotionPlannerError:
-    """A copy of ``err`` with its own arguments (a remembered failure is never changed)."""
-    again = type(err).__new__(type(err))
-    again.__dict__.update(err.__dict__)
-    again.args = err.args
-    return again
 
 
 def _since(start: float) -> float:

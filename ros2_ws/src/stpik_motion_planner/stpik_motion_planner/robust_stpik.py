@@ -32,12 +32,13 @@ from collections import OrderedDict
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 import pinocchio as pin
 
 from stpik_motion_planner.collision import QueryLog, SceneQuery, SceneWorld
-from stpik_motion_planner.exceptions import MotionPlannerError, PlanningTimeout
+from stpik_motion_planner.exceptions import MotionPlannerError, PlanningTimeout, copy_error
 from stpik_motion_planner.rrt_connect import RrtConnect, question_seed
 from stpik_motion_planner.stpik import Stpik, joint_segment
 
@@ -76,11 +77,7 @@ class _Outcome:
         """The value again (a copy), or raise a copy of the error with its original message."""
         if self.ok:
             return None if self.value is None else np.array(self.value, copy=True)
-        value = self.value
-        again = type(value).__new__(type(value))
-        again.__dict__.update(value.__dict__)
-        again.args = self.args
-        raise again
+        raise copy_error(cast(MotionPlannerError, self.value), self.args)  # not ok: the error
 
 
 class RobustStpik(Stpik):
