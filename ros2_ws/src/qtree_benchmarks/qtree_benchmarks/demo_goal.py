@@ -8,6 +8,8 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 from qtree_node_support.orchestration import NodeProcess
@@ -36,12 +38,8 @@ def retrieve_target(args: argparse.Namespace, nodes: list[NodeProcess]) -> Any:
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     rclpy.init()
-    try:
+    with _ctrl_c_is_interrupt():
         node = rclpy.create_node('qtree_demo')
-    except Exception:  # RCLError: rclpy's SIGINT handler shut the context down just before
-        if not rclpy.ok():
-            raise KeyboardInterrupt from None
-        raise
     try:
         client = ActionClient(node, RetrieveTarget, '/retrieve_target')
         deadline = time.monotonic() + args.timeout
@@ -102,12 +100,8 @@ def _wait_for_server(client: Any) -> bool:
     """
     import rclpy
 
-    try:
+    with _ctrl_c_is_interrupt():
         found = client.wait_for_server(timeout_sec=0.5)
-    except Exception:
-        if not rclpy.ok():
-            raise KeyboardInterrupt from None
-        raise
     if not rclpy.ok():
         raise KeyboardInterrupt
     return found
@@ -115,18 +109,32 @@ def _wait_for_server(client: Any) -> bool:
 
 def _spin_until_done(node: Any, future: Any, nodes: list[NodeProcess], deadline: float) -> Any:
     import rclpy
-    from rclpy.executors import ExternalShutdownException
 
     while not future.done():
-        try:
+        with _ctrl_c_is_interrupt():
             rclpy.spin_once(node, timeout_sec=0.1)
-        except ExternalShutdownException:  # rclpy's SIGINT handler shut the context down
-            raise KeyboardInterrupt from None
-        except Exception:  # RCLError: the handler shut it down while the wait set was built
-            if not rclpy.ok():  # (suite of c3e95c4: Ctrl-C exited 1 instead of 130)
-                raise KeyboardInterrupt from None
-            raise
         check_alive(nodes)
         if time.monotonic() > deadline:
             raise DemoError('timed out waiting for the task planner (see --timeout)')
     return future.result()
+
+
+@contextmanager
+def _ctrl_c_is_interrupt() -> Iterator[None]:
+    """A Ctrl-C during the block ends the demo with KeyboardInterrupt (exit code 130).
+
+    rclpy's SIGINT handler shuts the context down; the rclpy call in flight then raises
+    ExternalShutdownException, or RCLError when the shutdown came while it built its wait set or
+    created the node (suites of 9ffde18 and c3e95c4: Ctrl-C exited 1 instead of 130).
+    """
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    try:
+        yield
+    except ExternalShutdownException:
+        raise KeyboardInterrupt from None
+    except Exception:
+        if not rclpy.ok():
+            raise KeyboardInterrupt from None
+        raise
