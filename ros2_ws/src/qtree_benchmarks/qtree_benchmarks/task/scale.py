@@ -366,7 +366,7 @@ def scene_total(records: list[dict], key: str) -> int:
 
 
 def _layout(record: dict) -> str:
-    return record.get('layout', 'accessible')  # records of runs before #30 item 5
+    return record.get('layout', 'accessible')  # records and rows of runs before #30 item 5
 
 
 def _families(record: dict) -> list[str]:
@@ -380,7 +380,7 @@ def markdown(rows: list[dict], meta: dict) -> str:
         '',
         f'Oracle: {meta["oracle"]}; generator layouts '
         f'`{", ".join(meta.get("layouts", [meta.get("generator_layout", "uniform")]))}`, grasp '
-        f'families `{"+".join(meta.get("grasp_families", ["side"]))}`; '
+        f'families `{"+".join(_families(meta))}`; '
         f'{meta["scenes"]} scenes per (layout, N, density); '
         f'grasps wider than the hand in returned answers: {meta.get("too_wide_grasps", "n/a")}; '
         f'{meta["workers"]} worker(s); total wall time {meta["wall_time_s"]:.0f} s. '
@@ -393,9 +393,9 @@ def markdown(rows: list[dict], meta: dict) -> str:
         '|---|---|---|---|---|---|---|---|---|---|---|---|',
     ]
     for r in rows:
-        families = '+'.join(r.get('grasp_families', ['side']))
+        families = '+'.join(_families(r))
         lines.append(
-            f'| {r.get("layout", "accessible")} | {families} '
+            f'| {_layout(r)} | {families} '
             f'| {r["n_obstacles"]} | {r["density"]:g} | {r["method"]} | {r["solved_share"]:.0%} '
             f'| {r["optimal_share"]:.0%} | {r["planner_runs_mean"]:.0f} '
             f'| {r["wall_s_mean"]:.2f} ({r["wall_s_max"]:.1f}) | {r["episodes_mean"]:.0f} '
@@ -445,16 +445,14 @@ def plot(rows: list[dict], path: Any) -> None:
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
-    groups = sorted({(r.get('layout', 'accessible'), r['density']) for r in rows})
+    groups = sorted({(_layout(r), r['density']) for r in rows})
     styles = ('-', '--', ':', '-.')
     for method in METHODS:
         for (layout, density), style in zip(groups, styles * len(groups), strict=False):
             sel = [
                 r
                 for r in rows
-                if r['method'] == method
-                and r['density'] == density
-                and r.get('layout', 'accessible') == layout
+                if r['method'] == method and r['density'] == density and _layout(r) == layout
             ]
             if not sel:
                 continue
