@@ -322,7 +322,7 @@ class ClosedLoopController:
         if self._motion is None or self.q_ref is None:
             raise ExecutionStopped('joint_state', 'step() before begin()')
         c = self.config
-        q = np.asarray(q_meas, dtype=float)
+        q = np.array(q_meas, dtype=float)  # a copy: a read-only measurement reaches numba
         if q.shape != (7,) or not np.all(np.isfinite(q)):
             raise ExecutionStopped('joint_state', f'measured joints must be 7 finite angles: {q}')
         ee_ref = self._motion.ee_at(self._t)
