@@ -255,3 +255,40 @@ def test_nearest_turn_is_the_same_pose_within_pi(robot, turns):
     assert np.all(np.abs(turned - near) <= np.pi)
     assert np.allclose(robot.ee_pose(turned).homogeneous, robot.ee_pose(q).homogeneous, atol=1e-9)
     assert np.array_equal(turned[[1, 3, 5]], q[[1, 3, 5]])  # limited joints are never turned
+
+
+def test_fix14_the_planner_carry_ends_near_its_posture_reference(robot):
+    """#29 point 4: the planner passed no posture reference and the test above only read an
+    attribute back. The STPIK-tracked carry (:meth:`MotionPlanner._upright_carry`) passes the
+    pose above the drop slot as the reference: its posture task pulls the arm to that IK
+    solution, not the lift's (measured: 0.063 rad from it; 0.207 rad with no reference)."""
+    from qtree_scene.scenario import load_scenario
+    from stpik_motion_planner.planner import MotionPlanner
+
+    planner = MotionPlanner(load_scenario('s1'), model=robot)
+    q_lift, q_above = READY.copy(), READY.copy()
+    q_above[0] += 0.8  # the same EE height and tilt, turned about the base
+    tilted = q_above.copy()
+    tilted[5] += 0.8
+    # A joint transit that tips the object: the planner replaces it by the Cartesian carry.
+    planner.stpik.transit = lambda *args, **kwargs: np.array([tilted, q_above])
+    ee = pin.SE3(robot.ee_pose(q_lift))
+    in_hand = ee.actInv(pin.SE3(np.eye(3), ee.translation - np.r_[0.0, 0.0, 0.05]))
+    carry = planner._upright_carry(q_lift, q_above, in_hand, SceneWorld([]), np.inf)
+    assert np.degrees(planner._carried_tilts(carry, in_hand).max()) < 1.0
+    assert np.linalg.norm(carry[-1] - q_above) < 0.1
+
+
+def test_fix15_a_posture_reference_pulls_the_tracked_arm_toward_it(robot):
+    """#29 point 4: the reference changes where ``track`` ends, not only an attribute."""
+    stpik = Stpik(robot, PlannerConfig())
+    ee = pin.SE3(robot.ee_pose(READY))
+    goal = pin.SE3(ee.rotation, ee.translation + np.array([0.0, 0.1, 0.05]))
+    leg = [pin.SE3.Interpolate(ee, goal, t) for t in np.linspace(0.1, 1.0, 10)]
+    reference = READY.copy()
+    reference[2] += 0.6  # the elbow turned in the null space
+    plain = stpik.track(READY, leg, SceneWorld([]), [True] * len(leg))
+    pulled = stpik.track(READY, leg, SceneWorld([]), [True] * len(leg), reference=reference)
+    for q in (plain[-1], pulled[-1]):
+        assert np.linalg.norm(robot.ee_pose(q).translation - goal.translation) < 0.01
+    assert np.linalg.norm(pulled[-1] - reference) < np.linalg.norm(plain[-1] - reference) - 0.02
