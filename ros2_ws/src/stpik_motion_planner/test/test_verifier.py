@@ -146,6 +146,11 @@ def test_the_planner_proves_the_executors_stop_distance(robot):
         )
         == STOP_CLEARANCE_M
     )
+    from qtree_scene.scenario import load_scenario
+    from stpik_motion_planner.planner import MotionPlanner
+
+    # The planner's own verifier (it checked at clearance_m=0 before #29).
+    assert MotionPlanner(load_scenario('s1'), model=robot).verifier.clearance_m == STOP_CLEARANCE_M
     traj, post, carried = _carried_over(robot, 0.002)
     assert TrajectoryVerifier(robot).verify(traj, [post], carried).ok
     strict = TrajectoryVerifier(robot, clearance_m=STOP_CLEARANCE_M).verify(traj, [post], carried)
