@@ -173,11 +173,13 @@ class CartesianSampler:
         parts: dict[str, fcl.Convex],
         spheres: dict[str, tuple[np.ndarray, float]],
         pose: pin.SE3,
+        movable_margin_m: float | None = None,
     ) -> list[str]:
         """Ids of the scene bodies closer than the margin to a hand part placed at ``pose``.
 
         ``spheres``: per part, a bounding sphere in the EE frame (centre [m] (3,), radius [m]),
-        for the cull of :meth:`.collision.SceneWorld.probe_hits`.
+        for the cull of :meth:`.collision.SceneWorld.probe_hits`. ``movable_margin_m``: a wider
+        margin [m] for the non-static bodies (the statics keep ``obstacle_min_distance_m``).
         """
         rotation, translation = pose.rotation, pose.translation
         transform = fcl.Transform(rotation, translation)
@@ -186,7 +188,10 @@ class CartesianSampler:
         for name, geometry in parts.items():
             body = fcl.CollisionObject(geometry, transform)
             centre, radius = spheres[name]
-            hit += self.scene.probe_hits(body, rotation @ centre + translation, radius, margin)
+            world_centre = rotation @ centre + translation
+            hit += self.scene.probe_hits(body, world_centre, radius, margin)
+            if movable_margin_m is not None and movable_margin_m > margin:
+                hit += self.movable.probe_hits(body, world_centre, radius, movable_margin_m)
         return sorted(set(hit))
 
     def poses_free(self, poses: list[pin.SE3]) -> bool:
@@ -198,7 +203,8 @@ class CartesianSampler:
         """Ids of the bodies in the hand's approach corridor (pre-grasp → grasp), sorted.
 
         The corridor is the real hand swept along the approach axis over the pre-grasp standoff
-        (:attr:`HandModel.swept`), grown by ``obstacle_min_distance_m``; [] when it is clear.
+        (:attr:`HandModel.swept`), grown by ``obstacle_min_distance_m`` for the static bodies and
+        by ``obstacle_activation_m − position_tolerance_m`` for the others; [] when it is clear.
 
         Raises:
             ValueError: the hand model was swept over another standoff than the config's.
@@ -208,7 +214,15 @@ class CartesianSampler:
                 f'hand swept over {self.hand.standoff_m} m, pre-grasp standoff is '
                 f'{self.config.pregrasp_standoff_m} m'
             )
-        return self._hits(self.hand.swept, self.hand.swept_spheres, grasp)
+        # The movable bodies at STPIK's obstacle activation distance less the position tolerance
+        # (#29 point 6): the approach is tracked at full tolerance and the obstacle task holds a
+        # hand point off a neighbour at the activation distance, so a corridor passing closer
+        # than that less the tolerance went on to STPIK and failed there as IK_NOT_CONVERGED
+        # (950 S1-S3 + generated questions: 38 such answers become NO_CARTESIAN_PATH, the same
+        # 132 feasible, 9 of them by another approach). At the full 25 mm 132 feasible fell to
+        # 59: STPIK does track corridors inside the activation band, within its tolerance.
+        activation = self.config.obstacle_activation_m - self.config.position_tolerance_m
+        return self._hits(self.hand.swept, self.hand.swept_spheres, grasp, activation)
 
     def corridor_free(self, grasp: pin.SE3) -> bool:
         """The hand's approach corridor (pre-grasp → grasp, wrist link included) is clear."""

@@ -99,8 +99,9 @@ def test_corridor_narrower_than_the_hand_but_wider_than_the_old_box_is_blocked(
 
 
 def test_corridor_wider_than_the_hand_is_free(hand, make_scenario, make_cylinder):
-    # Surfaces 0.115 m from the axis: the open fingers (0.104 m) + margin (5 mm) pass.
-    posts = [make_cylinder(f'P{i}', 0.62, s * 0.145) for i, s in enumerate((-1, 1))]
+    # Surfaces 0.125 m from the axis: the open fingers (0.104 m) + the corridor's margin to
+    # movable bodies (15 mm: STPIK's 25 mm activation less its 10 mm tolerance, #29) pass.
+    posts = [make_cylinder(f'P{i}', 0.62, s * 0.155) for i, s in enumerate((-1, 1))]
     sampler = _sampler(hand, make_scenario, *posts)
     grasp = _grasp(0.65, 0.0, 0.07)
     assert sampler.corridor_blockers(grasp) == []

@@ -292,3 +292,21 @@ def test_fix15_a_posture_reference_pulls_the_tracked_arm_toward_it(robot):
     for q in (plain[-1], pulled[-1]):
         assert np.linalg.norm(robot.ee_pose(q).translation - goal.translation) < 0.01
     assert np.linalg.norm(pulled[-1] - reference) < np.linalg.norm(plain[-1] - reference) - 0.02
+
+
+def test_fix16_a_corridor_stpik_cannot_track_is_no_cartesian_path():
+    """#29 point 6: the corridor test kept 5 mm from the neighbours while STPIK's obstacle task
+    activates at 25 mm and the approach is tracked at the full 10 mm tolerance, so corridors
+    passing 5-15 mm from a neighbour went on to STPIK and the answer was IK_NOT_CONVERGED. The
+    corridor now keeps activation − position tolerance (15 mm) from the movable bodies: on this
+    generated scene every approach of O1 passes that close to O3, and the answer names it
+    (before: IK_NOT_CONVERGED from one of those approaches)."""
+    from qtree_scene.generator import generate_clutter
+    from stpik_motion_planner.planner import MotionPlanner
+    from stpik_motion_planner.result import Reason
+
+    planner = MotionPlanner(generate_clutter(8, 0.2, 1, layout='uniform'))
+    planner.blockers.annotate = lambda result, *_: result
+    result = planner.check('O1', [])
+    assert result.reason == Reason.NO_CARTESIAN_PATH, result.message
+    assert 'blocked by O3' in result.message
