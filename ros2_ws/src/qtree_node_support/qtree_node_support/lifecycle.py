@@ -30,6 +30,7 @@ the motion planner killed after 10 s), dumping the stacks first so the hang is s
 from __future__ import annotations
 
 import faulthandler
+import functools
 import os
 import signal
 import sys
@@ -150,11 +151,14 @@ def run_node(
         if not shutting_down(context):
             raise
     finally:
-        _quietly(context, cleanup and node and (lambda: cleanup(node)))  # data saved first
+        if cleanup is not None and node is not None:
+            _quietly(context, functools.partial(cleanup, node))  # data saved first
         if own_process and exit_watchdog:  # bound the exit of the process
             start_exit_watchdog(code, EXECUTOR_SHUTDOWN_S + EXIT_WATCHDOG_S)
-        _quietly(context, executor and (lambda: executor.shutdown(EXECUTOR_SHUTDOWN_S)))
-        _quietly(context, node and node.destroy_node)
+        if executor is not None:
+            _quietly(context, functools.partial(executor.shutdown, EXECUTOR_SHUTDOWN_S))
+        if node is not None:
+            _quietly(context, node.destroy_node)
         rclpy.try_shutdown(context=context)
         if own_process:  # answered: a later run in this process starts afresh; a request that
             StopRequest.clear()  # comes before it calls run_node still stops it at once
@@ -185,10 +189,8 @@ def start_exit_watchdog(code: int, timeout_s: float = EXIT_WATCHDOG_S) -> thread
     return watchdog
 
 
-def _quietly(context: Context, step: Callable[[], Any] | None) -> None:
+def _quietly(context: Context, step: Callable[[], Any]) -> None:
     """Run a cleanup ``step``; ignore what the shutdown race raises (KeyboardInterrupt too)."""
-    if not step:
-        return
     try:
         step()
     except (KeyboardInterrupt, ExternalShutdownException):
