@@ -37,7 +37,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar
 
 import rclpy
 import rclpy.logging
@@ -51,6 +51,7 @@ EXECUTOR_SHUTDOWN_S = 5.0  # longest wait for running callbacks at exit [s]
 SPIN_POLL_S = 0.2  # longest wait of the spin loop before a pending signal is handled [s]
 EXIT_WATCHDOG_S = 3.0  # longest wait for the interpreter to exit once cleaned up [s]
 EXIT_OK, EXIT_STARTUP = 0, 2
+NodeT = TypeVar('NodeT', bound=Node)  # the node class run_node builds and cleans up
 
 
 class StopRequest:
@@ -88,11 +89,11 @@ def shutting_down(context: Context, grace_s: float = SHUTDOWN_GRACE_S) -> bool:
 
 
 def run_node(
-    make_node: Callable[[], Node],
+    make_node: Callable[[], NodeT],
     *,
     args: list[str] | None = None,
     make_executor: Callable[[Context], Executor] | None = None,
-    cleanup: Callable[[Node], Any] | None = None,
+    cleanup: Callable[[NodeT], Any] | None = None,
     startup_errors: tuple[type[BaseException], ...] = (),
     context: Context | None = None,
     name: str = 'node',
@@ -131,7 +132,7 @@ def run_node(
         rclpy.init(args=args, context=context, signal_handler_options=SignalHandlerOptions.NO)
     else:
         rclpy.init(args=args, context=context)
-    node: Node | None = None
+    node: NodeT | None = None
     executor: Executor | None = None
     code = EXIT_OK
     try:
