@@ -24,6 +24,7 @@ import math
 import pathlib
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
+from typing import Any
 
 import fcl
 import numpy as np
@@ -131,7 +132,16 @@ def full_model() -> pin.Model:
 def link_parents() -> dict[str, str]:
     """Parent link of every non-root link of the URDF: ``{child_link: parent_link}``."""
     root = ET.fromstring(urdf_text())
-    return {j.find('child').get('link'): j.find('parent').get('link') for j in root.iter('joint')}
+    return {_joint_link(j, 'child'): _joint_link(j, 'parent') for j in root.iter('joint')}
+
+
+def _joint_link(joint: ET.Element, tag: str) -> str:
+    """The ``link`` attribute of a URDF joint's ``<parent>`` or ``<child>`` (``tag``)."""
+    element = joint.find(tag)
+    link = None if element is None else element.get('link')
+    if link is None:
+        raise ModelError(f'joint {joint.get("name")!r} has no <{tag} link=...>')
+    return link
 
 
 @functools.cache
@@ -186,7 +196,7 @@ def link_placements(q_all: dict[str, float]) -> dict[str, pin.SE3]:
     return placements
 
 
-def _to_fcl_geometry(geometry: object) -> fcl.CollisionGeometry:
+def _to_fcl_geometry(geometry: Any) -> fcl.CollisionGeometry:
     """python-fcl copy of a coal primitive (cylinder or box)."""
     if hasattr(geometry, 'halfLength'):
         return fcl.Cylinder(float(geometry.radius), 2.0 * float(geometry.halfLength))

@@ -141,7 +141,7 @@ def from_parameters(values: dict[str, Any]) -> Disturbances:
         DisturbanceError: a value is NaN, negative, out of range or of the wrong type; the
             message names the parameter.
     """
-    fields = {}
+    fields: dict[str, Any] = {}
     for parameter, name in PARAMETER_FIELDS.items():
         if parameter in values:
             value = values[parameter]

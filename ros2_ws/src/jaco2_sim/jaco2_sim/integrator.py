@@ -175,7 +175,7 @@ class JointIntegrator:
             :data:`GOAL_TOLERANCE` of the last point, after the last point's time).
         """
         self.time += self.period
-        if self._times is None:
+        if self._times is None or self._points is None:
             self.velocity = np.zeros(7)
             return False
         elapsed = self.time - self._start

@@ -24,7 +24,7 @@ STATE_QOS = QoSProfile(depth=10)  # /joint_states: reliable, volatile
 TRAJECTORY_QOS = QoSProfile(depth=10)  # /joint_trajectory
 MAX_TRAJECTORY_POINTS_CAP = 100_000  # upper bound of max_trajectory_points (~0.9 s blocked)
 # (name, default, (description, min, max)); robot_description (read-only URDF) is added on top.
-PARAMETERS = [
+PARAMETERS: list[tuple[str, Any, tuple[Any, ...]]] = [
     ('scenario', 's1', ('scenario name (s1, s2, s3) or YAML path',)),
     ('sim_rate_hz', 100.0, ('integration and /joint_states rate [Hz]', 1.0, 1000.0)),
     ('scene_rate_hz', 10.0, ('max /scene rate while an object moves [Hz]', 0.1, 100.0)),

@@ -29,14 +29,14 @@ import dataclasses
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 import yaml
 from qtree_scene.exceptions import ScenarioError
-from qtree_scene.fields import brief, number
+from qtree_scene.fields import Fail, brief, number
 from qtree_scene.scenario import validate_scenario
-from qtree_scene.scene import ObjectSpec, Scenario
+from qtree_scene.scene import ObjectSpec, Scenario, vec3
 
 from jaco2_sim.exceptions import SceneEventError
 
@@ -126,7 +126,7 @@ def parse_events(text: str, scenario: Scenario) -> tuple[SceneEvent, ...]:
 def _parse_event(index: int, entry: Any, objects: dict[str, ObjectSpec]) -> SceneEvent:
     name = f'scene_events[{index}]'
 
-    def fail(key: str, problem: str) -> None:
+    def fail(key: str, problem: str) -> NoReturn:
         raise SceneEventError(f'{name}.{key}: {problem}')
 
     if not isinstance(entry, dict):
@@ -168,7 +168,7 @@ def _parse_event(index: int, entry: Any, objects: dict[str, ObjectSpec]) -> Scen
 
 
 def _trigger(
-    entry: dict, object_id: str, objects: dict[str, ObjectSpec], fail: Callable[..., None]
+    entry: dict, object_id: str, objects: dict[str, ObjectSpec], fail: Fail
 ) -> dict[str, Any]:
     has_time, has_hand = 'at_s' in entry, 'hand_within_m' in entry
     if has_time == has_hand:
@@ -189,9 +189,7 @@ def _trigger(
     return {'hand_within_m': distance, 'near': near}
 
 
-def _added_spec(
-    object_id: str, entry: dict, fields: dict[str, Any], fail: Callable[..., None]
-) -> ObjectSpec:
+def _added_spec(object_id: str, entry: dict, fields: dict[str, Any], fail: Fail) -> ObjectSpec:
     shape = entry.get('shape', 'cylinder')
     x, y = fields['xy']
     yaw = fields.get('yaw') or 0.0
@@ -201,10 +199,9 @@ def _added_spec(
         centre = (x, y, height / 2)
         return ObjectSpec(object_id, 'obstacle', 'cylinder', centre, yaw, radius, height)
     if shape == 'box':
-        size = tuple(_numbers(entry.get('size'), 3, 'size', fail, positive=True))
+        size = vec3(_numbers(entry.get('size'), 3, 'size', fail, positive=True))
         return ObjectSpec(object_id, 'obstacle', 'box', (x, y, size[2] / 2), yaw, size=size)
     fail('shape', f"must be 'cylinder' or 'box', got {brief(shape)}")
-    raise AssertionError  # unreachable: fail raises
 
 
 def placed(spec: ObjectSpec, xy: Sequence[float], yaw: float | None) -> ObjectSpec:
@@ -232,8 +229,13 @@ def _check_placed(
     event: SceneEvent, objects: dict[str, ObjectSpec], scenario: Scenario
 ) -> dict[str, ObjectSpec]:
     """The objects after ``event`` (move or add), refused if the scene becomes invalid."""
-    old = objects.get(event.object_id)
-    new = event.spec if event.kind == 'add' else placed(old, event.xy, event.yaw)
+    if event.kind == 'add':
+        new = event.spec
+    else:
+        old, xy = objects.get(event.object_id), event.xy
+        assert old is not None and xy is not None, 'checked by _parse_event'
+        new = placed(old, xy, event.yaw)
+    assert new is not None, 'an add event carries its spec'
     after = {**objects, event.object_id: new}
     check_scene(scenario, list(after.values()), f'{event.field}.xy')
     return after
@@ -282,9 +284,11 @@ class SceneEvents:
             if event.at_s is not None:
                 fire = now_s - self.armed_at_s >= event.at_s - 1e-9
             else:
-                c = centre(event.near)
-                fire = hand is not None and c is not None
-                fire = fire and float(np.linalg.norm(hand - c)) <= event.hand_within_m
+                c, within = centre(event.near), event.hand_within_m
+                if hand is None or c is None or within is None:
+                    fire = False
+                else:
+                    fire = float(np.linalg.norm(hand - c)) <= within
             if fire:
                 self.fired.add(event.index)
                 out.append(event)
@@ -302,9 +306,7 @@ class SceneEvents:
         return None
 
 
-def _numbers(
-    value: Any, n: int, key: str, fail: Callable[..., None], positive: bool = False
-) -> list[float]:
+def _numbers(value: Any, n: int, key: str, fail: Fail, positive: bool = False) -> list[float]:
     if not isinstance(value, (list, tuple)) or len(value) != n:
         fail(key, f'{n} numbers expected, got {brief(value)}')
     return [number(v, key, fail, positive) for v in value]

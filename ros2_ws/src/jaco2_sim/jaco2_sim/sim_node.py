@@ -37,10 +37,9 @@ class Jaco2SimNode(Node):
         super().__init__('jaco2_sim', **node_options)
         api.declare_parameters(self)
         p = lambda name: api.param(self, name)  # noqa: E731
-        self.core = Simulation(
-            *map(p, ('scenario', 'sim_rate_hz', 'finger_angle_rad', 'initial_configuration')),
-            api.disturbance_values(self),
-        )
+        self.core = Simulation(p('scenario'), p('sim_rate_hz'), p('finger_angle_rad'),
+                               p('initial_configuration'),
+                               api.disturbance_values(self))  # fmt: skip
         api.apply_parameters(self, self.core, [self.get_parameter('scene_events')])
         self.add_on_set_parameters_callback(lambda ps: api.check_parameters(self, self.core, ps))
         self.add_post_set_parameters_callback(self._apply_parameters)
@@ -48,10 +47,11 @@ class Jaco2SimNode(Node):
         self.scene_pub = self.create_publisher(Scene, '/scene', LATCHED_QOS)
         self.urdf_pub = self.create_publisher(String, '/robot_description', LATCHED_QOS)
         self._motion = MutuallyExclusiveCallbackGroup()  # services never stop the motion (#18)
-        qos, group = api.TRAJECTORY_QOS, {'callback_group': self._motion}
+        qos, group = api.TRAJECTORY_QOS, self._motion
         self.create_subscription(JointTrajectory, '/joint_trajectory', self._on_raw_trajectory,
-                                 qos, raw=True, **group)  # fmt: skip
-        self.create_subscription(JointState, p('command_topic'), self._on_command, qos, **group)
+                                 qos, raw=True, callback_group=group)  # fmt: skip
+        self.create_subscription(JointState, p('command_topic'), self._on_command, qos,
+                                 callback_group=group)  # fmt: skip
         for kind, name, cb in [(ResetScene, '~/reset_scene', self._on_reset),
                                (SetScene, '~/set_scene', self._on_set_scene),
                                (AttachObject, '~/attach_object', self._on_attach)]:  # fmt: skip

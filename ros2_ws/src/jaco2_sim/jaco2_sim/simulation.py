@@ -75,9 +75,8 @@ class Simulation:
         self.robot = Jaco2Model(finger_angle)
         self.scenario = load_scenario(scenario)
         self.world = World(self.scenario)
-        self.sim = JointIntegrator(
-            self.robot.limits, rate_hz, self.scenario.home if q0 is None else q0
-        )
+        start = self.scenario.home if q0 is None else q0
+        self.sim = JointIntegrator(self.robot.limits, rate_hz, np.asarray(start, dtype=float))
         self.drive = DisturbedDrive(self.sim, from_parameters(disturbances or {}))
         self.fingers = np.zeros(len(FINGER_JOINTS))
         self.fingers[:3] = self.robot.finger_angle
@@ -204,8 +203,12 @@ class Simulation:
         if event.kind == 'remove':
             world.remove(event.object_id)
             return
-        if event.kind == 'add':
+        if event.kind == 'add' and event.spec is not None:
             spec = event.spec
+        elif event.xy is None:
+            raise Jaco2SimError(
+                f'scene event {event.field}: no position for {quote(event.object_id)}'
+            )
         else:
             state = world.state(event.object_id)
             if state.status != 'in_clutter':

@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 from qtree_node_support.text import quote
 from qtree_scene.placement import settle_pose
-from qtree_scene.scene import ObjectSpec, Scenario, Status
+from qtree_scene.scene import ObjectSpec, Scenario, Status, vec3
 
 from jaco2_sim.exceptions import WorldError
 
@@ -127,7 +127,7 @@ class World:
         self.version += 1
         return True
 
-    def detach(self, object_id: str, status: Status = 'relocated') -> None:
+    def detach(self, object_id: str, status: str = 'relocated') -> None:
         """Release ``object_id`` where it is, with status ``'relocated'`` or ``'in_clutter'``.
 
         Raises:
@@ -195,5 +195,5 @@ class World:
             if state.status == 'in_clutter':
                 p, r = state.pose.translation, state.pose.rotation
                 yaw = math.atan2(r[1, 0], r[0, 0])
-                out.append(dataclasses.replace(state.spec, position=tuple(map(float, p)), yaw=yaw))
+                out.append(dataclasses.replace(state.spec, position=vec3(p), yaw=yaw))
         return out

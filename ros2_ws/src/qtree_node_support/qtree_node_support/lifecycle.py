@@ -30,13 +30,14 @@ the motion planner killed after 10 s), dumping the stacks first so the hang is s
 from __future__ import annotations
 
 import faulthandler
+import functools
 import os
 import signal
 import sys
 import threading
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar
 
 import rclpy
 import rclpy.logging
@@ -50,6 +51,7 @@ EXECUTOR_SHUTDOWN_S = 5.0  # longest wait for running callbacks at exit [s]
 SPIN_POLL_S = 0.2  # longest wait of the spin loop before a pending signal is handled [s]
 EXIT_WATCHDOG_S = 3.0  # longest wait for the interpreter to exit once cleaned up [s]
 EXIT_OK, EXIT_STARTUP = 0, 2
+NodeT = TypeVar('NodeT', bound=Node)  # the node class run_node builds and cleans up
 
 
 class StopRequest:
@@ -87,11 +89,11 @@ def shutting_down(context: Context, grace_s: float = SHUTDOWN_GRACE_S) -> bool:
 
 
 def run_node(
-    make_node: Callable[[], Node],
+    make_node: Callable[[], NodeT],
     *,
     args: list[str] | None = None,
     make_executor: Callable[[Context], Executor] | None = None,
-    cleanup: Callable[[Node], Any] | None = None,
+    cleanup: Callable[[NodeT], Any] | None = None,
     startup_errors: tuple[type[BaseException], ...] = (),
     context: Context | None = None,
     name: str = 'node',
@@ -130,7 +132,7 @@ def run_node(
         rclpy.init(args=args, context=context, signal_handler_options=SignalHandlerOptions.NO)
     else:
         rclpy.init(args=args, context=context)
-    node: Node | None = None
+    node: NodeT | None = None
     executor: Executor | None = None
     code = EXIT_OK
     try:
@@ -150,11 +152,14 @@ def run_node(
         if not shutting_down(context):
             raise
     finally:
-        _quietly(context, cleanup and node and (lambda: cleanup(node)))  # data saved first
+        if cleanup is not None and node is not None:
+            _quietly(context, functools.partial(cleanup, node))  # data saved first
         if own_process and exit_watchdog:  # bound the exit of the process
             start_exit_watchdog(code, EXECUTOR_SHUTDOWN_S + EXIT_WATCHDOG_S)
-        _quietly(context, executor and (lambda: executor.shutdown(EXECUTOR_SHUTDOWN_S)))
-        _quietly(context, node and node.destroy_node)
+        if executor is not None:
+            _quietly(context, functools.partial(executor.shutdown, EXECUTOR_SHUTDOWN_S))
+        if node is not None:
+            _quietly(context, node.destroy_node)
         rclpy.try_shutdown(context=context)
         if own_process:  # answered: a later run in this process starts afresh; a request that
             StopRequest.clear()  # comes before it calls run_node still stops it at once
@@ -185,10 +190,8 @@ def start_exit_watchdog(code: int, timeout_s: float = EXIT_WATCHDOG_S) -> thread
     return watchdog
 
 
-def _quietly(context: Context, step: Callable[[], Any] | None) -> None:
+def _quietly(context: Context, step: Callable[[], Any]) -> None:
     """Run a cleanup ``step``; ignore what the shutdown race raises (KeyboardInterrupt too)."""
-    if not step:
-        return
     try:
         step()
     except (KeyboardInterrupt, ExternalShutdownException):

@@ -40,8 +40,10 @@ class RerunFeed:
         try:
             from qtree_recorder import rerun_view
 
-            path = Path(rrd_path) if mode == 'save' else None
-            self.view = rerun_view.RunView(mode=mode, rrd_path=path)
+            if mode == 'save':
+                self.view = rerun_view.RunView(mode='save', rrd_path=Path(rrd_path))
+            else:
+                self.view = rerun_view.RunView(mode='spawn')
             self.topics = tuple(rerun_view.TOPICS)
         except Exception as err:  # ImportError, rerun errors, bad path: recording goes on
             self._fail(f'{type(err).__name__}: {err}')

@@ -137,7 +137,7 @@ class RunView:
         self.rec = rr.RecordingStream(application_id, recording_id=recording_id)
         self.rec.set_log_time_enabled(False)  # wall time of logging: meaningless in a replay
         blueprint = bp.default_blueprint()
-        if mode == 'save':
+        if rrd_path is not None and mode == 'save':
             Path(rrd_path).parent.mkdir(parents=True, exist_ok=True)
             self.rec.save(rrd_path, default_blueprint=blueprint)
         elif mode == 'spawn':
@@ -555,6 +555,7 @@ def _object_archetypes(obj: dict[str, Any]) -> list[Any]:
     centre = [float(v) for v in obj['position']]
     quaternion = rr.Quaternion(xyzw=[float(v) for v in obj.get('orientation', (0, 0, 0, 1))])
     label = str(obj['id']) if role != 'static' else None
+    shape: rr.Boxes3D | rr.Cylinders3D
     if obj.get('shape', 'cylinder') == 'box':
         shape = rr.Boxes3D(centers=[centre], sizes=[[float(v) for v in obj['size']]],
                            quaternions=[quaternion], colors=[color], fill_mode='solid',

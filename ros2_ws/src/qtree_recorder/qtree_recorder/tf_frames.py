@@ -73,13 +73,9 @@ class ArmFrames:
         except (ET.ParseError, ValueError, RuntimeError) as err:
             raise RobotModelError(str(err).splitlines()[0] if str(err) else repr(err)) from None
         joints = list(root.iter('joint'))
-        try:
-            self._parents = {j.find('child').get('link'): j.find('parent').get('link')
-                             for j in joints}  # fmt: skip
-        except AttributeError:
-            raise RobotModelError('a <joint> lacks its <parent> or <child>') from None
-        fixed = {j.find('child').get('link') for j in joints if j.get('type') == 'fixed'}
-        links = [link.get('name') for link in root.iter('link')]
+        self._parents = {_joint_link(j, 'child'): _joint_link(j, 'parent') for j in joints}
+        fixed = {_joint_link(j, 'child') for j in joints if j.get('type') == 'fixed'}
+        links = [link.get('name', '') for link in root.iter('link')]
         roots = [name for name in links if name not in self._parents]
         if not links or len(roots) != 1:
             raise RobotModelError(f'expected one root link, found {roots or "none"}')
@@ -191,3 +187,16 @@ def pose_transform(
     quat = tuple(float(orientation[k]) for k in 'xyzw')
     norm = math.sqrt(sum(v * v for v in quat)) or 1.0
     return FrameTransform(parent, child, (x, y, z), tuple(v / norm for v in quat))  # type: ignore[arg-type]
+
+
+def _joint_link(joint: ET.Element, tag: str) -> str:
+    """The ``link`` attribute of a joint's ``<parent>`` or ``<child>`` (``tag``).
+
+    Raises:
+        RobotModelError: the element or its attribute is missing.
+    """
+    element = joint.find(tag)
+    link = element.get('link') if element is not None else None
+    if link is None:
+        raise RobotModelError('a <joint> lacks its <parent> or <child>')
+    return link

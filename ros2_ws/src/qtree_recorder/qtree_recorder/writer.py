@@ -8,6 +8,7 @@ Rerun view. An exception (a bad message, a full disk) is logged, throttled, and 
 
 from __future__ import annotations
 
+import functools
 import queue
 import threading
 from collections.abc import Callable
@@ -47,16 +48,20 @@ class RecordWriter:
         """Queue ``(topic, type_name, raw, t_ns, offers, type_hash)`` (any thread, no wait)."""
         self._queue.put(item)
 
+    def _tick(self) -> None:
+        if self.recording is not None:
+            self.recording.tick()
+
     def _work(self) -> None:
         while True:
             try:
                 item = self._queue.get(timeout=IDLE_WAIT_S)
             except queue.Empty:
-                self._guard(lambda: self.recording and self.recording.tick())
+                self._guard(self._tick)
                 continue
             if item is None:
                 return
-            self._guard(lambda item=item: self._process(*item))
+            self._guard(functools.partial(self._process, *item))
 
     def _guard(self, action: Callable[[], Any]) -> None:
         try:

@@ -8,7 +8,7 @@ import math
 import numbers
 import reprlib
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NoReturn
 
 from qtree_scene.exceptions import ScenarioError
 
@@ -16,11 +16,14 @@ MAX_SHOWN = 60  # characters of a bad value quoted in an error message
 _REPR = reprlib.Repr()
 _REPR.maxlevel, _REPR.maxstring, _REPR.maxother = 3, MAX_SHOWN, MAX_SHOWN
 
+Fail = Callable[[str, str], NoReturn]
+"""``fail(field, problem)``: raise the reader's error naming the field; never returns."""
 
-def failer(source: str) -> Callable[..., Any]:
+
+def failer(source: str) -> Fail:
     """``fail(field, problem)`` raising :class:`ScenarioError` for ``source``."""
 
-    def fail(field: str, problem: str) -> None:
+    def fail(field: str, problem: str) -> NoReturn:
         raise ScenarioError(source, field, problem)
 
     return fail
@@ -37,7 +40,7 @@ def brief(value: Any) -> str:
     return text if len(text) <= MAX_SHOWN else f'{text[: MAX_SHOWN - 3]}...'
 
 
-def number(value: Any, field: str, fail: Callable[..., Any], positive: bool = False) -> float:
+def number(value: Any, field: str, fail: Fail, positive: bool = False) -> float:
     """``value`` as a finite float (> 0 when ``positive``), else ``fail(field, problem)``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         fail(field, f'expected a number, got {type(value).__name__} {brief(value)}')

@@ -53,7 +53,7 @@ from qtree_scene.layouts import (
 from qtree_scene.packed_layouts import PACKED_LAYOUTS, packed_layout
 from qtree_scene.placement import DROP_TABLE_REACH_M
 from qtree_scene.scenario import TABLE_ID, validate_scenario
-from qtree_scene.scene import ObjectSpec, Scenario
+from qtree_scene.scene import ObjectSpec, Role, Scenario
 
 MAX_DENSITY = 0.4  # random sequential addition of mixed shapes jams near 0.45; stay below [-]
 ASPECT = 1.75  # region width (y) / depth (x) [-]
@@ -293,19 +293,16 @@ def _assemble(
         s, fp = shapes[k], footprints[k]
         is_target = k == target
         position = (fp.center[0], fp.center[1], s.height / 2)
-        common = {
-            'id': 'T' if is_target else f'O{rank}',
-            'role': 'target' if is_target else 'obstacle',
-            'position': position,
-        }
+        object_id = 'T' if is_target else f'O{rank}'
+        object_role: Role = 'target' if is_target else 'obstacle'
         if s.box:
-            objects.append(
-                ObjectSpec(shape='box', yaw=fp.yaw, size=(s.sx, s.sy, s.height), **common)
-            )
+            size = (s.sx, s.sy, s.height)
+            spec = ObjectSpec(object_id, object_role, 'box', position, fp.yaw, size=size)
         else:
-            objects.append(
-                ObjectSpec(shape='cylinder', radius=s.radius, height=s.height, **common)
+            spec = ObjectSpec(
+                object_id, object_role, 'cylinder', position, radius=s.radius, height=s.height
             )
+        objects.append(spec)
     x_max = x_min + depth + TABLE_MARGIN
     half_y = max(DROP_ZONE_CENTER[1] + DROP_ZONE_SIZE[1] / 2, width / 2) + TABLE_MARGIN
     half_y = max(half_y, DROP_TABLE_REACH_M)  # room for the drop slots beside the robot

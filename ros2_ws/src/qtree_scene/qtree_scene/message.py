@@ -20,27 +20,27 @@ Every error is a :class:`~qtree_scene.exceptions.ScenarioError` whose field is t
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from collections.abc import Mapping, Sequence
+from typing import Any, NoReturn
 
 from jaco2_description.model import BASE_LINK, HOME
 
 from qtree_scene.exceptions import ScenarioError
-from qtree_scene.fields import brief, failer, number
+from qtree_scene.fields import Fail, brief, failer, number
 from qtree_scene.scenario import (
     MAX_OBJECTS,
     TABLE_ID,
     check_object_count,
     validate_scenario,
 )
-from qtree_scene.scene import ObjectSpec, Role, Scenario, Shape, Status
+from qtree_scene.scene import ObjectSpec, Role, Scenario, Shape, Status, vec3
 
 # qtree_msgs/msg/ObjectState and shape_msgs/msg/SolidPrimitive constants (test_message.py checks
 # them against the generated message classes).
 ROLE_CODES: dict[Role, int] = {'target': 0, 'obstacle': 1, 'static': 2}
 STATUS_CODES = {'in_clutter': 0, 'grasped': 1, 'relocated': 2}
 PRIMITIVE_BOX, PRIMITIVE_CYLINDER = 1, 3  # SolidPrimitive.BOX, .CYLINDER
-PRIMITIVE_NAMES = {PRIMITIVE_BOX: 'box', PRIMITIVE_CYLINDER: 'cylinder'}
+PRIMITIVE_NAMES: dict[int, Shape] = {PRIMITIVE_BOX: 'box', PRIMITIVE_CYLINDER: 'cylinder'}
 DIMENSION_NAMES = {'box': ('x', 'y', 'z'), 'cylinder': ('height', 'radius')}
 MAX_ID_CHARS = 256  # longest object id [characters]
 UPRIGHT_TOLERANCE = 0.01  # largest tilt of an object's z axis from the world z [rad]
@@ -144,7 +144,7 @@ def parse_scene_msg(msg: Any, home: tuple[float, ...] = tuple(HOME)) -> Scenario
     return scenario
 
 
-def _object(obj: Any, field: str, fail: Callable[..., Any]) -> ObjectSpec:
+def _object(obj: Any, field: str, fail: Fail) -> ObjectSpec:
     object_id = obj.id
     if not isinstance(object_id, str) or not object_id.strip():
         fail(f'{field}.id', f'must be a non-empty string, got {brief(object_id)}')
@@ -169,10 +169,10 @@ def _object(obj: Any, field: str, fail: Callable[..., Any]) -> ObjectSpec:
     if shape == 'cylinder':
         height, radius = sizes
         return ObjectSpec(object_id, role, shape, position, yaw, radius=radius, height=height)
-    return ObjectSpec(object_id, role, shape, position, yaw, size=tuple(sizes))
+    return ObjectSpec(object_id, role, shape, position, yaw, size=vec3(sizes))
 
 
-def _shape(primitive: Any, field: str, name: str, fail: Callable[..., Any]) -> Shape:
+def _shape(primitive: Any, field: str, name: str, fail: Fail) -> Shape:
     shape = PRIMITIVE_NAMES.get(primitive.type)
     if shape is None:
         fail(
@@ -190,32 +190,32 @@ def _shape(primitive: Any, field: str, name: str, fail: Callable[..., Any]) -> S
     return shape
 
 
-def _status(obj: Any, field: str, fail: Callable[..., Any]) -> int:
+def _status(obj: Any, field: str, fail: Fail) -> int:
     if obj.status not in _STATUS_NAMES:
         problem = f'unknown status {obj.status} (IN_CLUTTER 0, GRASPED 1, RELOCATED 2)'
         fail(f'{field}.status', f'{obj.id!r}: {problem}')
     return obj.status
 
 
-def _named(name: str, what: str, fail: Callable[..., Any]) -> Callable[..., Any]:
+def _named(name: str, what: str, fail: Fail) -> Fail:
     """``fail`` with the object (and the dimension) named in front of the problem."""
     label = f'{name} {what}'.strip()
 
-    def named(field: str, problem: str) -> None:
+    def named(field: str, problem: str) -> NoReturn:
         fail(field, f'{label}: {problem}')
 
     return named
 
 
-def _point(p: Any, field: str, fail: Callable[..., Any]) -> tuple[float, float, float]:
-    return tuple(number(getattr(p, a), f'{field}.{a}', fail) for a in 'xyz')
+def _point(p: Any, field: str, fail: Fail) -> tuple[float, float, float]:
+    return vec3(number(getattr(p, a), f'{field}.{a}', fail) for a in 'xyz')
 
 
-def _positive_xyz(v: Any, field: str, fail: Callable[..., Any]) -> tuple[float, float, float]:
-    return tuple(number(getattr(v, a), f'{field}.{a}', fail, positive=True) for a in 'xyz')
+def _positive_xyz(v: Any, field: str, fail: Fail) -> tuple[float, float, float]:
+    return vec3(number(getattr(v, a), f'{field}.{a}', fail, positive=True) for a in 'xyz')
 
 
-def _quaternion(q: Any, field: str, name: str, fail: Callable[..., Any]) -> tuple[float, ...]:
+def _quaternion(q: Any, field: str, name: str, fail: Fail) -> tuple[float, ...]:
     x, y, z, w = (number(getattr(q, a), f'{field}.{a}', _named(name, '', fail)) for a in 'xyzw')
     norm = math.sqrt(x * x + y * y + z * z + w * w)
     if abs(norm - 1.0) > UNIT_TOLERANCE:
@@ -223,19 +223,19 @@ def _quaternion(q: Any, field: str, name: str, fail: Callable[..., Any]) -> tupl
     return x / norm, y / norm, z / norm, w / norm
 
 
-def _yaw(q: Any, field: str, name: str, fail: Callable[..., Any]) -> float:
+def _yaw(q: Any, field: str, name: str, fail: Fail) -> float:
     x, y, z, w = _quaternion(q, field, name, fail)
     return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
-def _upright(q: Any, field: str, object_id: str, fail: Callable[..., Any]) -> None:
+def _upright(q: Any, field: str, object_id: str, fail: Fail) -> None:
     x, y, _, _ = _quaternion(q, field, repr(object_id), fail)
     tilt = 2 * math.asin(min(1.0, math.hypot(x, y)))  # angle of the z axis from world z [rad]
     if tilt > UPRIGHT_TOLERANCE:
         fail(field, f'{object_id!r}: tilted {tilt:.3f} rad, objects stand upright (yaw only)')
 
 
-def _identity(pose: Any, field: str, why: str, fail: Callable[..., Any]) -> None:
+def _identity(pose: Any, field: str, why: str, fail: Fail) -> None:
     position = _point(pose.position, f'{field}.position', fail)
     x, y, z, _ = _quaternion(pose.orientation, f'{field}.orientation', field, fail)
     if field == 'robot_base' and any(abs(v) > 1e-9 for v in position):

@@ -134,8 +134,8 @@ def _rows(
             ends[0] = ends[1] = half
         else:
             ends[side] = offset + half
-        centre = rows[row][0] * radial + sign * offset * across
-        fp = footprint(shapes[k], tuple(centre), yaw)
+        xy = rows[row][0] * radial + sign * offset * across
+        fp = footprint(shapes[k], (float(xy[0]), float(xy[1])), yaw)
         if not in_bounds(fp, keepout) or overlaps_any(fp, placed, GAP_RANGE_M[0] - 1e-9):
             ends[side] = math.inf  # that side of the row is full: the object tries again
             pending.insert(0, k)

@@ -38,16 +38,15 @@ from __future__ import annotations
 
 import math
 import pathlib
-from collections.abc import Callable
 from typing import Any
 
 import yaml
 from jaco2_description.model import HOME, arm_limits
 
 from qtree_scene.exceptions import ScenarioError
-from qtree_scene.fields import brief, failer, number
+from qtree_scene.fields import Fail, brief, failer, number
 from qtree_scene.footprint import Footprint, footprint_of, overlap
-from qtree_scene.scene import ObjectSpec, Scenario
+from qtree_scene.scene import ROLES, ObjectSpec, Scenario, role, vec3
 
 TABLE_ID = 'table'
 DEFAULT_KEEPOUT = 0.2  # [m]
@@ -57,7 +56,6 @@ _TOP = {'name', 'description', 'home', 'robot_keepout_radius', 'table', 'drop_zo
 _BOX = {'center_xy', 'size'}
 _OBJECT = {'id', 'role', 'shape', 'xy', 'radius', 'height', 'size', 'yaw'}
 _SHAPE_KEYS = {'cylinder': {'radius', 'height'}, 'box': {'size'}}
-_ROLES = ('target', 'obstacle', 'static')
 MAX_SCENARIO_BYTES = 1_000_000  # largest scenario file (s3: 3 kB; 200 objects: ~40 kB) [bytes]
 MAX_NAME_CHARS = 256  # longest scenario name or object id (= the motion planner's id limit)
 
@@ -148,13 +146,13 @@ def parse_scenario(data: Any, source: str = '') -> Scenario:
         role='static',
         shape='box',
         position=(table_xy[0], table_xy[1], -table_size[2] / 2),
-        size=tuple(table_size),
+        size=vec3(table_size),
     )
     scenario = Scenario(
         name=name,
         objects=(*objects, table),
         drop_zone_center=(zone_xy[0], zone_xy[1], zone_size[2] / 2),
-        drop_zone_size=tuple(zone_size),
+        drop_zone_size=vec3(zone_size),
         home=tuple(home),
         description=_text(description, 'description', fail),
         source=source,
@@ -164,7 +162,7 @@ def parse_scenario(data: Any, source: str = '') -> Scenario:
     return scenario
 
 
-def check_object_count(count: int, fail: Callable[..., Any]) -> None:
+def check_object_count(count: int, fail: Fail) -> None:
     """Fail (field ``objects``) when a scene has more than :data:`MAX_OBJECTS` objects."""
     if count > MAX_OBJECTS:
         fail('objects', f'{count} objects, at most {MAX_OBJECTS} are accepted (table included)')
@@ -221,7 +219,7 @@ def validate_scenario(
     _check_on_table_and_clear(
         zone, 'drop_zone', 'the drop zone', table_fp, scenario.robot_keepout_radius, fail
     )
-    footprints = []
+    footprints: list[tuple[int, Footprint]] = []
     for i, obj in movable:
         fp = footprint_of(obj)
         _check_on_table_and_clear(
@@ -242,7 +240,7 @@ def _check_on_table_and_clear(
     name: str,
     table: Footprint,
     keepout: float,
-    fail: Callable[..., Any],
+    fail: Fail,
 ) -> None:
     if table.distance_to_point(fp.center) > 0.0:
         fail(field, f'{name}: centre {fp.center} is not on the table')
@@ -254,14 +252,14 @@ def _check_on_table_and_clear(
         fail(field, problem)
 
 
-def _parse_object(data: Any, field: str, fail: Callable[..., Any]) -> ObjectSpec:
+def _parse_object(data: Any, field: str, fail: Fail) -> ObjectSpec:
     if not isinstance(data, dict):
         fail(field, f'must be a mapping, got {type(data).__name__}')
     _check_keys(data, _OBJECT, {'id', 'role', 'shape', 'xy'}, f'{field}.', fail)
     object_id = _string(data['id'], f'{field}.id', fail)
     if object_id == TABLE_ID:
         fail(f'{field}.id', f'{TABLE_ID!r} is reserved for the table')
-    role = _choice(data['role'], _ROLES, f'{field}.role', fail)
+    object_role = role(_choice(data['role'], ROLES, f'{field}.role', fail))
     shape = _choice(data['shape'], tuple(_SHAPE_KEYS), f'{field}.shape', fail)
     wrong = sorted((_SHAPE_KEYS['box'] | _SHAPE_KEYS['cylinder']) - _SHAPE_KEYS[shape] & set(data))
     if wrong:
@@ -274,15 +272,15 @@ def _parse_object(data: Any, field: str, fail: Callable[..., Any]) -> ObjectSpec
         radius = number(data['radius'], f'{field}.radius', fail, positive=True)
         height = number(data['height'], f'{field}.height', fail, positive=True)
         position = (xy[0], xy[1], height / 2)
-        return ObjectSpec(object_id, role, 'cylinder', position, yaw, radius=radius, height=height)
+        return ObjectSpec(
+            object_id, object_role, 'cylinder', position, yaw, radius=radius, height=height
+        )
     size = _vector(data['size'], 3, f'{field}.size', fail, positive=True)
     position = (xy[0], xy[1], size[2] / 2)
-    return ObjectSpec(object_id, role, 'box', position, yaw, size=tuple(size))
+    return ObjectSpec(object_id, object_role, 'box', position, yaw, size=vec3(size))
 
 
-def _check_keys(
-    data: dict, allowed: set, required: set, prefix: str, fail: Callable[..., Any]
-) -> None:
+def _check_keys(data: dict, allowed: set, required: set, prefix: str, fail: Fail) -> None:
     for key in data:
         if key not in allowed:
             problem = f'unknown key {brief(key)} (allowed: {", ".join(sorted(allowed))})'
@@ -291,7 +289,7 @@ def _check_keys(
         fail(f'{prefix}{key}', 'missing')
 
 
-def _get(section: Any, key: str, name: str, allowed: set, fail: Callable[..., Any]) -> Any:
+def _get(section: Any, key: str, name: str, allowed: set, fail: Fail) -> Any:
     if not isinstance(section, dict):
         fail(name, f'must be a mapping, got {type(section).__name__}')
     _check_keys(section, allowed, allowed, f'{name}.', fail)
@@ -305,9 +303,7 @@ def _key_field(prefix: str, key: Any) -> str:
     return f'{prefix.removesuffix(".")}[{brief(key)}]'
 
 
-def _vector(
-    value: Any, n: int, field: str, fail: Callable[..., Any], positive: bool = False
-) -> list[float]:
+def _vector(value: Any, n: int, field: str, fail: Fail, positive: bool = False) -> list[float]:
     if not isinstance(value, (list, tuple)):
         fail(field, f'must be a list of {n} numbers, got {type(value).__name__} {brief(value)}')
     if len(value) != n:
@@ -315,13 +311,13 @@ def _vector(
     return [number(v, f'{field}[{k}]', fail, positive) for k, v in enumerate(value)]
 
 
-def _text(value: Any, field: str, fail: Callable[..., Any]) -> str:
+def _text(value: Any, field: str, fail: Fail) -> str:
     if not isinstance(value, str):
         fail(field, f'expected a string, got {type(value).__name__} {brief(value)}')
     return value
 
 
-def _string(value: Any, field: str, fail: Callable[..., Any]) -> str:
+def _string(value: Any, field: str, fail: Fail) -> str:
     if not _text(value, field, fail).strip():
         fail(field, f'must be a non-empty string, got {brief(value)}')
     if len(value) > MAX_NAME_CHARS:  # names and ids are echoed in messages and /scene
@@ -329,7 +325,7 @@ def _string(value: Any, field: str, fail: Callable[..., Any]) -> str:
     return value
 
 
-def _choice(value: Any, choices: tuple[str, ...], field: str, fail: Callable[..., Any]) -> str:
+def _choice(value: Any, choices: tuple[str, ...], field: str, fail: Fail) -> str:
     if _text(value, field, fail) not in choices:
         fail(field, f'must be one of {", ".join(choices)}, got {brief(value)}')
     return value

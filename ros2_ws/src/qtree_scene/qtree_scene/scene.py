@@ -6,6 +6,7 @@ length is in metres and every angle in radians.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -14,6 +15,29 @@ Shape = Literal['cylinder', 'box']
 Status = Literal['in_clutter', 'grasped', 'relocated']
 
 Vec3 = tuple[float, float, float]
+ROLES: tuple[Role, ...] = ('target', 'obstacle', 'static')
+
+
+def vec3(values: Iterable[float]) -> Vec3:
+    """Three floats as a :data:`Vec3` (positions [m], box sizes [m]).
+
+    Raises:
+        ValueError: not exactly three values.
+    """
+    x, y, z = (float(v) for v in values)
+    return (x, y, z)
+
+
+def role(value: str) -> Role:
+    """``value`` as a :data:`Role`.
+
+    Raises:
+        ValueError: not one of :data:`ROLES`.
+    """
+    for known in ROLES:
+        if value == known:
+            return known
+    raise ValueError(f'role must be one of {ROLES}, got {value!r}')
 
 
 @dataclass(frozen=True)

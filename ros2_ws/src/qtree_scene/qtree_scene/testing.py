@@ -10,13 +10,15 @@ import math
 
 from jaco2_description.model import HOME as JACO2_HOME
 
-from qtree_scene.scene import ObjectSpec, Scenario
+from qtree_scene.scene import ObjectSpec, Role, Scenario
 
 TABLE = ObjectSpec('table', 'static', 'box', (0.35, 0.0, -0.025), size=(1.2, 1.4, 0.05))
 HOME = tuple(float(q) for q in JACO2_HOME)  # the Jaco2's home posture [rad]
 
 
-def cylinder(name: str, x: float, y: float, role: str = 'obstacle', h: float = 0.14) -> ObjectSpec:
+def cylinder(
+    name: str, x: float, y: float, role: Role = 'obstacle', h: float = 0.14
+) -> ObjectSpec:
     """A cylinder of radius 3 cm and height ``h`` [m] standing on the table at (x, y) [m]."""
     return ObjectSpec(name, role, 'cylinder', (x, y, h / 2), radius=0.03, height=h)
 

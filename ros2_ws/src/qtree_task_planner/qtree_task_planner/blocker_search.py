@@ -493,7 +493,8 @@ class BlockerSearch:
             unmet = [c for c in self.constraints.get(self.target, ()) if not c & done]
             if not unmet:
                 return None
-            return sorted(min(unmet, key=len), key=self.rank.__getitem__)
+            fewest = min(unmet, key=len)
+            return sorted(fewest, key=self.rank.__getitem__)
         union: set[str] = set()
         for obj in chosen - done:
             unmet = [c for c in self.constraints.get(obj, ()) if not c & done]
@@ -508,7 +509,7 @@ class BlockerSearch:
         needs = [c for c in self.constraints.get(self.target, ()) if not c & chosen]
         for obj in chosen - done:
             needs += [c for c in self.constraints.get(obj, ()) if not c & chosen]
-        count, used = 0, set()
+        count, used = 0, set[str]()
         for c in sorted(needs, key=len):
             if not c & used:
                 count += 1
@@ -867,13 +868,13 @@ def smallest_hitting_set(
             chosen = frozenset(combo)
             if all(b & chosen for b in sets):
                 return chosen
-    chosen: set[str] = set()
+    greedy: set[str] = set()
     left = list(sets)
     while left:
         best = max(universe, key=lambda o: (sum(o in b for b in left), -rank[o]))
-        chosen.add(best)
+        greedy.add(best)
         left = [b for b in left if best not in b]
-    return frozenset(chosen)
+    return frozenset(greedy)
 
 
 def blocker_search(

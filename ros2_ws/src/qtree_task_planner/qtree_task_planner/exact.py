@@ -123,7 +123,7 @@ def count_feasible_sequences(
     ways: dict[frozenset[str], int] = {frozenset(): 1}
     orders: dict[frozenset[str], tuple[str, ...]] = {frozenset(): ()}
     by_level: dict[int, int] = {}
-    level_sets = [frozenset()]
+    level_sets: list[frozenset[str]] = [frozenset()]
     total_sets = 1
     while level_sets:
         nxt: dict[frozenset[str], int] = {}

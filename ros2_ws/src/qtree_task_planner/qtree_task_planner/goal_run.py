@@ -199,7 +199,7 @@ def execute_with_replans(
         first: the training result of the goal's scene.
         scene: the /scene message that training was made on.
     """
-    results, prefix = [first], ()
+    results, prefix = [first], tuple[str, ...]()
     timeout_s = ctx.param('execute_timeout_s')
     while True:
         changed = scene_watch(ctx.scene, scene)

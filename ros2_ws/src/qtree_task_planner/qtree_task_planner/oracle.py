@@ -166,7 +166,8 @@ class TableOracle:
             return FeasibilityAnswer(False, None)
         left = [sorted(need - done) for need in needs]
         if self.report == 'fewest':
-            return FeasibilityAnswer(False, tuple(min(left, key=len)) if left else ())
+            fewest: list[str] = min(left, key=len) if left else []
+            return FeasibilityAnswer(False, tuple(fewest))
         return FeasibilityAnswer(False, tuple(sorted({o for need in left for o in need})))
 
     def approach_blockers(
@@ -254,7 +255,8 @@ class MemoOracle:
         self.queries += 1
         key = (frozenset(relocated), object_id)
         if key not in self.rechecks:
-            self.rechecks[key] = self.inner.recheck(tuple(relocated), object_id)
+            recheck = getattr(self.inner, 'recheck')  # noqa: B009 (see can_recheck)
+            self.rechecks[key] = recheck(tuple(relocated), object_id)
             self.planner_runs += 1
             if self.rechecks[key].feasible:
                 self.results[key] = True

@@ -92,7 +92,7 @@ class TaskPlannerNode(Node):
             self._execution.cancel()
         return CancelResponse.ACCEPT
 
-    def _execute(self, goal_handle) -> Result:
+    def _execute(self, goal_handle) -> RetrieveTarget.Result:
         if not self._busy.acquire(blocking=False):
             goal_handle.abort()
             return result_msg(None, error_code=Result.INVALID_GOAL, message='busy with a goal')

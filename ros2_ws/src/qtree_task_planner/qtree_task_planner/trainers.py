@@ -149,7 +149,7 @@ class BlockerSearchTrainer:
             episodes=self.episode,
             mp_calls=self.search.queries,
             planner_runs=self.oracle.planner_runs - self.search._runs0,
-            converged=optimal and found.certified,
+            converged=found is not None and optimal and found.certified,
             stop_reason=stop_reason,
             first_optimal_episode=self.episode if optimal else -1,
             optimal_level=len(sequence),
