@@ -173,6 +173,7 @@ def validate_scenario(
     source: str | None = None,
     position_field: str = 'xy',
     allow_no_target: bool = False,
+    check_layout: bool = True,
 ) -> None:
     """Check the geometry and roles of a scenario built in code, from a file or from a message.
 
@@ -183,35 +184,55 @@ def validate_scenario(
             (``xy`` in YAML files, ``pose.position`` in a Scene message).
         allow_no_target: accept a scene without a target (the clutter while the target is
             held or after it was relocated: scene events, #32); two targets stay refused.
+        check_layout: also check the layout (object count, every object and the drop zone on
+            the table, outside the robot's keep-out, no overlaps). False: only what planning
+            needs (ids, roles, finite poses, sizes, drop zone, home), for the motion planner,
+            which also plans in scenes built in code to test it (touching rings, no free
+            table, more than :data:`MAX_OBJECTS` objects); every scene from a file or a
+            message has passed the full check before it reaches the planner.
 
     Raises:
         ScenarioError: see the module docstring for the rules.
     """
     fail = failer(scenario.source or scenario.name if source is None else source)
-    check_object_count(len(scenario.objects), fail)
+    if check_layout:
+        check_object_count(len(scenario.objects), fail)
     movable = [(i, o) for i, o in enumerate(scenario.objects) if o.id != TABLE_ID]
     seen: dict[str, int] = {}
     for i, obj in enumerate(scenario.objects):
         if obj.id in seen:
             fail(f'objects[{i}].id', f'duplicate id {obj.id!r} (also objects[{seen[obj.id]}])')
         seen[obj.id] = i
+    for i, obj in enumerate(scenario.objects):  # scenarios built in code skip the parsers
+        _check_numbers(obj, f'objects[{i}]', fail)
     targets = [f'objects[{i}]' for i, o in movable if o.role == 'target']
     if len(targets) != 1 and not (allow_no_target and not targets):
         fail('objects', f'exactly one object must have role target, found {len(targets)}')
     if TABLE_ID not in seen:
         fail('table', 'missing')
-    table = scenario.object(TABLE_ID)
+    if not all(math.isfinite(v) for v in scenario.drop_zone_center):
+        fail('drop_zone.center_xy', f'must be finite, got {scenario.drop_zone_center}')
     if not all(math.isfinite(v) and v > 0 for v in scenario.drop_zone_size):
         fail('drop_zone.size', f'must be positive and finite, got {scenario.drop_zone_size}')
     if not (math.isfinite(scenario.robot_keepout_radius) and scenario.robot_keepout_radius >= 0):
         fail('robot_keepout_radius', f'must be ≥ 0, got {scenario.robot_keepout_radius}')
     limits = arm_limits()
+    if len(scenario.home) != len(limits.lower):
+        fail('home', f'must be {len(limits.lower)} joint angles, got {len(scenario.home)}')
     for k, (value, lo, hi) in enumerate(
         zip(scenario.home, limits.lower, limits.upper, strict=True)
     ):
         if not (math.isfinite(value) and lo <= value <= hi):
             fail(f'home[{k}]', f'{value} rad outside the joint limits [{lo:.4f}, {hi:.4f}]')
-    table_fp = footprint_of(table)
+    if check_layout:
+        _check_layout(scenario, movable, position_field, fail)
+
+
+def _check_layout(
+    scenario: Scenario, movable: list[tuple[int, ObjectSpec]], position_field: str, fail: Fail
+) -> None:
+    """The drop zone and every object on the table, outside the keep-out, not overlapping."""
+    table_fp = footprint_of(scenario.object(TABLE_ID))
     zone = Footprint(
         center=scenario.drop_zone_center[:2],
         half_size=(scenario.drop_zone_size[0] / 2, scenario.drop_zone_size[1] / 2),
@@ -232,6 +253,22 @@ def validate_scenario(
                 problem = f'{obj.id!r} overlaps {scenario.objects[j].id!r}'
                 fail(f'objects[{i}].{position_field}', problem)
         footprints.append((i, fp))
+
+
+def _check_numbers(obj: ObjectSpec, field: str, fail: Fail) -> None:
+    """Finite pose, known shape, positive sizes [m] of one object."""
+    if not all(math.isfinite(v) for v in (*obj.position, obj.yaw)):
+        fail(f'{field}.pose', f'{obj.id!r} has a non-finite pose {(*obj.position, obj.yaw)}')
+    if obj.shape == 'cylinder':
+        if not (math.isfinite(obj.radius) and obj.radius > 0):
+            fail(f'{field}.radius', f'{obj.id!r}: must be positive and finite, got {obj.radius}')
+        if not (math.isfinite(obj.height) and obj.height > 0):
+            fail(f'{field}.height', f'{obj.id!r}: must be positive and finite, got {obj.height}')
+    elif obj.shape == 'box':
+        if len(obj.size) != 3 or not all(math.isfinite(v) and v > 0 for v in obj.size):
+            fail(f'{field}.size', f'{obj.id!r}: 3 positive finite sizes, got {obj.size}')
+    else:
+        fail(f'{field}.shape', f'{obj.id!r} has unknown shape {obj.shape!r}')
 
 
 def _check_on_table_and_clear(

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-import math
 from collections import Counter
 from collections.abc import Sequence
 
 from qtree_node_support.text import quote
+from qtree_scene.exceptions import ScenarioError
+from qtree_scene.scenario import validate_scenario as check_scene
 from qtree_scene.scene import Scenario
 
 from stpik_motion_planner.exceptions import InvalidRequest
@@ -35,36 +36,18 @@ def format_ids(names: Sequence[object]) -> str:
 
 
 def validate_scenario(scenario: Scenario) -> None:
-    """Check that a scenario can be planned in.
+    """Check that a scenario can be planned in: :func:`qtree_scene.scenario.validate_scenario`,
+    the one validator of every scene (files, messages, code), answered as a planner error.
 
     Raises:
-        InvalidRequest: (``INVALID_SCENE``) no or several targets, duplicate ids, non-finite
-            poses, non-positive sizes, a home configuration that is not 7 finite angles.
+        InvalidRequest: (``INVALID_SCENE``) the scene validator's message (no or several
+            targets, duplicate ids, non-finite poses, non-positive sizes, a home configuration
+            outside the joint limits, ...).
     """
-
-    def bad(message: str) -> InvalidRequest:
-        return InvalidRequest(Reason.INVALID_SCENE, f'invalid scene: {message}')
-
-    ids = [o.id for o in scenario.objects]
-    if len(set(ids)) != len(ids):
-        raise bad('duplicate object ids')
-    if sum(o.role == 'target' for o in scenario.objects) != 1:
-        raise bad('exactly one object must be the target')
-    for o in scenario.objects:
-        numbers = [*o.position, o.yaw, o.radius, o.height, *o.size]
-        if not all(math.isfinite(v) for v in numbers):
-            raise bad(f'object {o.id!r} has a non-finite pose or size')
-        if o.shape == 'cylinder' and not (o.radius > 0 and o.height > 0):
-            raise bad(f'cylinder {o.id!r} needs radius > 0 and height > 0')
-        if o.shape == 'box' and not all(v > 0 for v in o.size):
-            raise bad(f'box {o.id!r} needs positive sizes')
-        if o.shape not in ('cylinder', 'box'):
-            raise bad(f'object {o.id!r} has unknown shape {o.shape!r}')
-    numbers = [*scenario.drop_zone_center, *scenario.drop_zone_size]
-    if not all(math.isfinite(v) for v in numbers) or min(scenario.drop_zone_size) <= 0:
-        raise bad('drop zone must be finite with positive size')
-    if len(scenario.home) != 7 or not all(math.isfinite(v) for v in scenario.home):
-        raise bad('home must be 7 finite joint angles')
+    try:
+        check_scene(scenario, check_layout=False)  # a file's or message's scene passed all
+    except ScenarioError as err:
+        raise InvalidRequest(Reason.INVALID_SCENE, f'invalid scene: {err}') from None
 
 
 def validate_request(scenario: Scenario, object_id: object, relocated: Sequence[object]) -> None:
@@ -127,7 +110,7 @@ def check_ids_given(object_id: object, relocated: Sequence[object]) -> None:
         raise InvalidRequest(Reason.INVALID_REQUEST, 'relocated_ids must be non-empty strings')
 
 
-def check_request_size(object_id: str, relocated: Sequence[object]) -> None:
+def check_request_size(object_id: object, relocated: Sequence[object]) -> None:
     """Check the documented size limits of a request (O(1) per id, no scene needed).
 
     Raises:
