@@ -100,6 +100,8 @@ class BlockerFinder:
         self.sweeps: dict[str, list[Sweep]] = {}
         self.partial: dict[str, list[Sweep]] = {}  # objects whose sweeps the deadline cut short
         self.time_s = 0.0
+        # False: answers go out without blockers (benchmarks timing the planner alone).
+        self.enabled = True
 
     def find(
         self, object_id: str, relocated: Iterable[str], deadline: float = math.inf
@@ -149,7 +151,9 @@ class BlockerFinder:
             The annotated answer; when the deadline cut the sweeps short, its blockers are those
             of the approaches swept so far and its message says so.
         """
-        if result.feasible or reason_family(result.reason) != ReasonFamily.PLANNING_FAILURE:
+        if not self.enabled or result.feasible:
+            return result
+        if reason_family(result.reason) != ReasonFamily.PLANNING_FAILURE:
             return result
         start = time.perf_counter()
         found = self.find(object_id, relocated, deadline)

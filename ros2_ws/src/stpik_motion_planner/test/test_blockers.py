@@ -128,3 +128,19 @@ def test_blocker_sweeps_share_the_request_time_limit(make_cylinder, robot):
     again = planner.check('T', ['O2'])  # a new request about T goes on with the sweeps
     assert again.blocking_ids == ('O1',) and 'time limit' not in again.message
     assert len(planner.blockers.sweeps['T']) == 9 and swept < 9
+
+
+def test_blockers_switched_off_leave_the_answer_alone(make_cylinder, robot):
+    """``blockers.enabled = False`` (the benchmarks timing the planner alone, #27: it replaced
+    assigning a no-op over the method): the same infeasible answer, without sweeps or names."""
+    scene = _scene(
+        make_cylinder('T', 0.62, 0.0, 'target'),
+        make_cylinder('O1', 0.52, 0.0),
+        make_cylinder('O2', 0.45, -0.35),
+    )
+    planner = MotionPlanner(scene, PlannerConfig(time_limit_s=60.0), model=robot)
+    planner.blockers.enabled = False
+    result = planner.check('T', [])
+    assert not result.feasible and 200 <= result.reason < 300
+    assert result.blocking_ids == () and 'blockers' not in result.timings
+    assert 'blockers' not in result.message and not planner.blockers.sweeps
