@@ -97,3 +97,36 @@ def test_scripts_are_thin_entry_points() -> None:
     for path in (SRC.parents[1] / 'scripts').glob('*.py'):
         lines = len(path.read_text().splitlines())
         assert lines <= 100, f'scripts/{path.name}: {lines} lines'
+
+
+KEYWORD_ONLY_TYPES = [
+    ('qtree_task_planner.blocker_search', 'BlockerSearchConfig'),
+    ('qtree_task_planner.blocker_search', 'BlockerSearchResult'),
+    ('qtree_task_planner.training', 'TrainingConfig'),
+    ('qtree_task_planner.training', 'TrainingResult'),
+    ('stpik_motion_planner.config', 'PlannerConfig'),
+    ('stpik_motion_planner.execution_config', 'ExecutionConfig'),
+    ('stpik_motion_planner.verifier', 'VerificationReport'),
+]
+
+
+@pytest.mark.parametrize(('module', 'name'), KEYWORD_ONLY_TYPES)
+def test_config_and_result_types_are_built_by_keyword(module: str, name: str) -> None:
+    """#27 item 3: every field of a config or result type is passed by name."""
+    import importlib
+    import inspect
+
+    cls = getattr(importlib.import_module(module), name)
+    parameters = list(inspect.signature(cls).parameters.values())
+    assert parameters and all(p.kind is p.KEYWORD_ONLY for p in parameters)
+
+
+def test_plan_results_take_only_the_answer_positionally() -> None:
+    """PlanResult: (feasible, reason, message) positionally, everything after by keyword."""
+    import inspect
+
+    from stpik_motion_planner.result import PlanResult
+
+    kinds = [p.kind for p in inspect.signature(PlanResult).parameters.values()]
+    assert kinds[:3] == [inspect.Parameter.POSITIONAL_OR_KEYWORD] * 3
+    assert all(k is inspect.Parameter.KEYWORD_ONLY for k in kinds[3:]) and len(kinds) > 10

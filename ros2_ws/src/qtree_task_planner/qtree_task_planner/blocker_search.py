@@ -113,7 +113,7 @@ ANYTIME_SHARE = 0.5  # share of a budget spent without an incumbent that starts 
 COMPLETION_SHARE = 0.75  # most of the runs left that one greedy completion may spend [-]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class BlockerSearchConfig:
     """Budget and options of one search.
 
@@ -146,7 +146,7 @@ class BlockerSearchConfig:
             raise InvalidParameterError('verify', self.verify, "must be 'auto', 'always', 'never'")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class BlockerSearchResult:
     """Outcome of one search.
 

@@ -100,13 +100,12 @@ def ask(oracle: Any, relocated: tuple[str, ...], object_id: str) -> FeasibilityA
 
 @runtime_checkable
 class FeasibilityOracle(Protocol):
-    """Answers feasibility queries (the motion-planner layer of Figure 2).
+    """Answers feasibility queries (the motion-planner layer of Figure 2)."""
 
-    Attributes:
-        planner_runs: real planner runs so far (cache misses).
-    """
-
-    planner_runs: int
+    @property
+    def planner_runs(self) -> int:
+        """Real planner runs so far (cache misses)."""
+        ...
 
     def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
         """Can ``object_id`` be grasped and relocated once ``relocated`` are gone?

@@ -43,7 +43,7 @@ STOP_TIME = 'time_limit'
 EXTRACTION_RND = 'first-target-episode'  # RND: the sequence of its first target-reaching episode
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TrainingConfig:
     """Hyper-parameters of one training (defaults: Sect. 4 of the paper).
 
@@ -133,7 +133,7 @@ class EpisodeStats:
     best_sequence: tuple[str, ...]
 
 
-@dataclass
+@dataclass(kw_only=True)
 class TrainingResult:
     """Outcome of a training.
 

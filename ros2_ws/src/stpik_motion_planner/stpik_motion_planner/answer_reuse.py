@@ -35,6 +35,7 @@ around the envelopes of R in slots 0 … |R|−1; and
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -135,7 +136,7 @@ def reuse_answers(
     kept = {
         key: result
         for key, result in entries.items()
-        if kept_because(key, result, ids, lambda k=key, r=result: clear_of(k, r), slots)
+        if kept_because(key, result, ids, functools.partial(clear_of, key, result), slots)
     }
     names = ', '.join(sorted(ids)) or 'nothing'
     return kept, f'kept {len(kept)} of {len(entries)} cached answers (changed: {names})'

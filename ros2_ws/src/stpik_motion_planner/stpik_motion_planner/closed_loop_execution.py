@@ -193,7 +193,8 @@ class Execution(TrajectoryExecution):
                         self._watched = None
                 if self._run_segment(motion, start, end, q_ref):
                     return self._undone(result, motion, object_id, index)
-                q_ref = self._controller.q_ref
+                last = self._live_controller.q_ref  # set by begin()
+                q_ref = q_ref if last is None else last
                 failure, reason = self._grasp_or_release(object_id, attach)
                 if failure:
                     self._stop(failure, reason)
@@ -205,12 +206,19 @@ class Execution(TrajectoryExecution):
             with self._lock:
                 self._controller = None
 
+    @property
+    def _live_controller(self) -> ClosedLoopController:
+        """The controller of the execution in progress (only used during one)."""
+        if self._controller is None:
+            raise RuntimeError('no execution in progress')
+        return self._controller
+
     def _run_segment(self, motion: PlannedMotion, start: int, end: int, q_ref: np.ndarray) -> str:
         """Track samples ``start`` to ``end`` of ``motion``; '' when done, else the stop."""
         timeout = self._node.get_parameter('execution_timeout_s').value
         self._segment_end.clear()
         with self._lock:
-            self._controller.begin(motion, start, end, q_ref)
+            self._live_controller.begin(motion, start, end, q_ref)
         duration = motion.times[end] - motion.times[start]
         if not self._segment_end.wait(duration + timeout):
             self._stop(f'segment to sample {end} not done in {duration + timeout:.1f} s')
@@ -230,8 +238,8 @@ class Execution(TrajectoryExecution):
             return why, Reason.EXECUTION_FAILED if reason == Reason.SUCCESS else reason
         with self._lock:
             self._stopped, self._watched = '', None
-            t_stop = self._controller.plan_time
-            self._controller.set_scene(self._live_scene())
+            t_stop = self._live_controller.plan_time
+            self._live_controller.set_scene(self._live_scene())
             self._scene_dirty = False
         t_grasp = float(result.times[result.grasp_index])
         failure, put_back = '', ''
@@ -243,7 +251,7 @@ class Execution(TrajectoryExecution):
                 put_back = f', {format_id(object_id)} put back in the clutter where it was grasped'
             if not failure:
                 with self._lock:
-                    self._controller.detach()
+                    self._live_controller.detach()
             t_stop = t_grasp
         failure = failure or self._back(motion, t_stop, float(result.times[0]))
         if failure:
@@ -268,13 +276,13 @@ class Execution(TrajectoryExecution):
             return why, Reason.EXECUTION_FAILED
         with self._lock:
             if not attach:
-                self._controller.detach()
+                self._live_controller.detach()
                 return '', Reason.SUCCESS
             found = self._scene_object(object_id)
             if found is None:
                 return f'{format_id(object_id)} is not in the last /scene', Reason.EXECUTION_FAILED
             spec, pose = found
-            self._controller.attach(spec, pose, np.array(self.q))
+            self._live_controller.attach(spec, pose, np.array(self.q))
         return '', Reason.SUCCESS
 
     def _on_tick(self) -> None:

@@ -13,6 +13,7 @@ import math
 import sys
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
 
 import fcl
 import numpy as np
@@ -184,7 +185,8 @@ def _half_extents(obj: ObjectSpec) -> tuple[float, float, float]:
     """Half sizes [m] of a box in the object's frame containing it (cylinder: r, r, h/2)."""
     if obj.shape == 'cylinder':
         return (obj.radius, obj.radius, obj.height / 2)
-    return tuple(0.5 * float(v) for v in obj.size)
+    sx, sy, sz = obj.size
+    return (0.5 * float(sx), 0.5 * float(sy), 0.5 * float(sz))
 
 
 def _probe_first(p: Proximity) -> Proximity:
@@ -568,7 +570,7 @@ def _sphere_radius(geometry: fcl.CollisionGeometry) -> float:
     return float(geometry.radius)
 
 
-def _fcl_geometry(geometry: object) -> fcl.CollisionGeometry:
+def _fcl_geometry(geometry: Any) -> fcl.CollisionGeometry:
     if hasattr(geometry, 'halfLength'):
         return fcl.Cylinder(float(geometry.radius), 2.0 * float(geometry.halfLength))
     if hasattr(geometry, 'halfSide'):

@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Any
 
 from stpik_motion_planner.exceptions import InvalidConfig
 from stpik_motion_planner.grasps import PAPER_GRASP_FAMILIES, check_families
@@ -76,7 +77,7 @@ INTEGER_FIELDS = frozenset(
 )
 
 
-@dataclass
+@dataclass(kw_only=True)
 class PlannerConfig:
     """All tunable numbers (see :data:`RANGES` for units and ranges) and the grasp families."""
 
@@ -147,7 +148,7 @@ class PlannerConfig:
         if self.self_activation_m < self.self_min_distance_m:
             raise InvalidConfig('self_activation_m', self.self_activation_m, 'below self_min')
 
-    def replace(self, **changes: float) -> PlannerConfig:
+    def replace(self, **changes: Any) -> PlannerConfig:
         """A validated copy with ``changes`` applied."""
         return dataclasses.replace(self, **changes)
 

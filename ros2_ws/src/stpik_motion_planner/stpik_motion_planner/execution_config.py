@@ -57,7 +57,7 @@ EXECUTION_RANGES: dict[str, tuple[float, float, str]] = {
 }
 
 
-@dataclass
+@dataclass(kw_only=True)
 class ExecutionConfig:
     """All tunable numbers of closed-loop execution; see :data:`EXECUTION_RANGES`."""
 

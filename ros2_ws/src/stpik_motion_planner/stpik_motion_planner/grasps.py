@@ -61,7 +61,7 @@ def rotation(approach: Approach) -> np.ndarray:
     return side_rotation(approach.yaw)
 
 
-def top_yaws(position: Sequence[float], count: int = TOP_YAWS) -> list[float]:
+def top_yaws(position: Sequence[float] | np.ndarray, count: int = TOP_YAWS) -> list[float]:
     """Closing yaws of a top grasp [rad]: the fingers across the base direction first (the
     wrist's natural turn), then ±π/count, ±2π/count, ... (a half turn in all: the open hand
     is nearly symmetric under a half turn, joint 7 turns it further).
@@ -72,7 +72,9 @@ def top_yaws(position: Sequence[float], count: int = TOP_YAWS) -> list[float]:
 
 
 def candidate_approaches(
-    position: Sequence[float], families: Sequence[str], side_yaws: Sequence[float]
+    position: Sequence[float] | np.ndarray,
+    families: Sequence[str],
+    side_yaws: Sequence[float] | np.ndarray,
 ) -> list[Approach]:
     """Every approach to try, family by family in the order of ``families``.
 

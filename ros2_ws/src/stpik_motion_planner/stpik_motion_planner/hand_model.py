@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from typing import Any
 
 import fcl
 import numpy as np
@@ -28,7 +29,7 @@ RING_POINTS = 24  # polygon inscribed in a cylinder's circle (under by r·(1 −
 WRIST_LINK = 'link_6'  # the last arm link, coaxial with the EE z axis whatever joint 7 does
 
 
-def _corners(geometry: object) -> np.ndarray:
+def _corners(geometry: Any) -> np.ndarray:
     if hasattr(geometry, 'halfSide'):
         return np.array(list(itertools.product([-1.0, 1.0], repeat=3))) * geometry.halfSide
     r, h = float(geometry.radius), float(geometry.halfLength)

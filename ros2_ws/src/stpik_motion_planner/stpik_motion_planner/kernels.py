@@ -25,7 +25,7 @@ import math
 import numba
 import numpy as np
 
-_OPTIONS = {'cache': True, 'nogil': True, 'fastmath': False}
+# Every kernel: cached on disk, releases the GIL, IEEE arithmetic (no fastmath).
 
 
 @numba.njit(
@@ -35,7 +35,9 @@ _OPTIONS = {'cache': True, 'nogil': True, 'fastmath': False}
         numba.int64[::1],
         numba.float64[:, :, ::1],
     ),
-    **_OPTIONS,
+    cache=True,
+    nogil=True,
+    fastmath=False,
 )
 def chain_placements(
     q: np.ndarray, joint_placements: np.ndarray, geometry_joint: np.ndarray, geometry_in_joint
@@ -80,7 +82,9 @@ def chain_placements(
         numba.float64,
         numba.boolean,
     ),
-    **_OPTIONS,
+    cache=True,
+    nogil=True,
+    fastmath=False,
 )
 def self_candidates(
     centres: np.ndarray,
@@ -125,7 +129,9 @@ def self_candidates(
         numba.float64,
         numba.boolean,
     ),
-    **_OPTIONS,
+    cache=True,
+    nogil=True,
+    fastmath=False,
 )
 def scene_candidates(
     centres: np.ndarray,
@@ -181,7 +187,9 @@ def scene_candidates(
         numba.float64,
         numba.float64,
     ),
-    **_OPTIONS,
+    cache=True,
+    nogil=True,
+    fastmath=False,
 )
 def solve_levels(
     jacobian: np.ndarray,
@@ -250,7 +258,9 @@ def solve_levels(
         numba.float64[::1],
         numba.float64[:, ::1],
     ),
-    **_OPTIONS,
+    cache=True,
+    nogil=True,
+    fastmath=False,
 )
 def replay_candidates(
     centres: np.ndarray,

@@ -353,12 +353,12 @@ class MotionPlanner:
         if len(self._sampled) > SAMPLED_KEYS:
             self._sampled.clear()
         entries = self._sampled.setdefault(key, [])
-        for seen, logs, path, found in entries:
+        for seen, seen_logs, seen_path, seen_found in entries:
             if seen == objects or all(
-                log.replays_in(world) for log, world in zip(logs, worlds, strict=True)
+                log.replays_in(world) for log, world in zip(seen_logs, worlds, strict=True)
             ):
-                failures.extend(copy_error(err) for err in found)
-                return path
+                failures.extend(copy_error(err) for err in seen_found)
+                return seen_path
         logs: tuple[list, list] = ([], [])
         for log, world in zip(logs, worlds, strict=True):
             world.recorders.append(log)

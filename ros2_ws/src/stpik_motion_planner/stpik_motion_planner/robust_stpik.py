@@ -123,8 +123,8 @@ class RobustStpik(Stpik):
             ):
                 self._memo.move_to_end(key)
                 self.memo_hits += 1
-                for log in self.bodies.recorders:  # an enclosing computation's queries
-                    log.extend(outcome.queries.queries if outcome.queries is not None else ())
+                for recorder in self.bodies.recorders:  # an enclosing computation's queries
+                    recorder.extend(outcome.queries.queries if outcome.queries is not None else ())
                 return outcome.again()
         log: list[SceneQuery] = []
         self.bodies.recorders.append(log)
@@ -172,8 +172,11 @@ class RobustStpik(Stpik):
 
     def _plain_converge(self, seed, target, scene, iterations, deadline) -> np.ndarray:
         key = self._key('converge', seed, target.homogeneous, extra=(iterations,))
-        return self._remembered(
-            key, scene, lambda: Stpik.converge(self, seed, target, scene, iterations, deadline)
+        return cast(  # converge gives a configuration or raises, never None
+            np.ndarray,
+            self._remembered(
+                key, scene, lambda: Stpik.converge(self, seed, target, scene, iterations, deadline)
+            ),
         )
 
     def track(self, q, samples, scene, tight, deadline=np.inf, reference=None):

@@ -15,6 +15,7 @@ import math
 import time
 from collections import deque
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -616,7 +617,7 @@ def _serial_chain(
     )
 
 
-def _bounding_radius(geometry: object) -> float:
+def _bounding_radius(geometry: Any) -> float:
     """Radius [m] of the sphere about a primitive's centre that contains it."""
     if hasattr(geometry, 'halfLength'):
         return math.hypot(float(geometry.radius), float(geometry.halfLength))

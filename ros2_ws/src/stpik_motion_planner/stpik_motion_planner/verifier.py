@@ -46,6 +46,7 @@ import math
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
 import coal
 import numpy as np
@@ -104,7 +105,7 @@ class Violation:
         )
 
 
-@dataclass
+@dataclass(kw_only=True)
 class VerificationReport:
     """Outcome of :meth:`TrajectoryVerifier.verify`.
 
@@ -153,7 +154,7 @@ def revolute_limits() -> dict[str, tuple[float, float]]:
         name = joint.get('name')
         limit = joint.find('limit')
         if name in ARM_JOINTS and joint.get('type') == 'revolute' and limit is not None:
-            out[name] = (float(limit.get('lower')), float(limit.get('upper')))
+            out[name] = (float(limit.attrib['lower']), float(limit.attrib['upper']))
     return out
 
 
@@ -173,7 +174,7 @@ def object_pose(obj: ObjectSpec) -> pin.SE3:
     return pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, obj.yaw), np.asarray(obj.position, dtype=float))
 
 
-def _bounding_radius(geometry: object) -> float:
+def _bounding_radius(geometry: Any) -> float:
     if isinstance(geometry, coal.Cylinder):
         return math.hypot(geometry.radius, geometry.halfLength)
     if isinstance(geometry, coal.Box):
@@ -218,7 +219,7 @@ class TrajectoryVerifier:
             chain[k] = np.linalg.norm(self.model.jointPlacements[k].translation)
         self._chain = chain
 
-    def reach(self, joint: int, placement: pin.SE3, geometry: object) -> np.ndarray:
+    def reach(self, joint: int, placement: pin.SE3, geometry: Any) -> np.ndarray:
         """D_{j,g} [m] (7,): bound on ‖p − o_j‖ for every point p of ``geometry`` on ``joint``."""
         own = float(np.linalg.norm(placement.translation)) + _bounding_radius(geometry)
         out = np.zeros(7)
@@ -251,14 +252,14 @@ class TrajectoryVerifier:
             static.append(obj.role == 'static')
         pairs: dict[str, list[tuple[int, int, str]]] = {'before': [], 'carry': [], 'after': []}
         for i, j in self.robot.self_collision_pairs:
-            for phase in pairs.values():
-                phase.append((robot_ids[i], robot_ids[j], 'self_collision'))
+            for members in pairs.values():
+                members.append((robot_ids[i], robot_ids[j], 'self_collision'))
         for k, sid in enumerate(scene_ids):
             for r, rid in enumerate(robot_ids):
                 if static[k] and names[r].endswith('link_base'):
                     continue
-                for phase in pairs.values():
-                    phase.append((rid, sid, 'scene_collision'))
+                for members in pairs.values():
+                    members.append((rid, sid, 'scene_collision'))
         if carried is not None:
             pose0 = object_pose(carried.obj)
             short, lift = _coal_geometry(carried.obj, self.support_tolerance_m)

@@ -104,7 +104,7 @@ def _why(rows: list[dict]) -> list[str]:
     return [*lines, '']
 
 
-def main() -> None:
+def main() -> int:
     """Generate the scenes, check each one, write the results."""
     args = parse()
     jobs = [(n, d, s) for n in args.sizes for d in args.densities for s in range(args.seeds)]
@@ -147,6 +147,7 @@ def main() -> None:
     meta['status'] = 'complete'
     write(rows, meta, args.out)
     print(args.out.with_suffix('.md').read_text())
+    return 0
 
 
 if __name__ == '__main__':

@@ -95,7 +95,7 @@ def markdown(r: dict) -> str:
     return '\n'.join(lines)
 
 
-def main() -> None:
+def main() -> int:
     """Ask every question of the planner and of the reference, write the results."""
     args = parse()
     jobs = [scene_questions(i, args.per_scene, args.seed) for i in range(args.scenes)]
@@ -125,6 +125,7 @@ def main() -> None:
     meta['status'] = 'complete'
     result = write(answers, meta)
     print(markdown(result))
+    return 0
 
 
 if __name__ == '__main__':

@@ -41,8 +41,10 @@ def run_demo(scenario: str, policy: str, domain: int, timeout_s: float) -> dict:
         process = subprocess.Popen(
             command, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
         )
-        ready = finished = None
-        lines = []
+        ready: float | None = None
+        finished: float | None = None
+        lines: list[str] = []
+        assert process.stdout is not None  # stdout=PIPE
         for line in process.stdout:
             lines.append(line.rstrip())
             if line.startswith('nodes ready') and ready is None:
@@ -53,9 +55,10 @@ def run_demo(scenario: str, policy: str, domain: int, timeout_s: float) -> dict:
                 episodes, mp_calls, planner_runs = (int(v) for v in match.groups())
                 row |= {'episodes': episodes, 'mp_calls': mp_calls, 'planner_runs': planner_runs}
         code = process.wait()
-    success = code == 0 and ready is not None and finished is not None and 'episodes' in row
-    row['training_wall_s'] = round(finished - ready, 1) if success else None
-    if not success:
+    if code == 0 and ready is not None and finished is not None and 'episodes' in row:
+        row['training_wall_s'] = round(finished - ready, 1)
+    else:
+        row['training_wall_s'] = None
         row['error'] = f'exit {code}: ' + ' | '.join(lines[-5:])
     return row
 

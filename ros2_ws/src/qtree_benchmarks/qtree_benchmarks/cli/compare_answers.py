@@ -89,7 +89,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--json', type=Path, help='with --compare: write the changes here')
     args = parser.parse_args(argv)
     if args.compare:
-        compare(*args.compare, args.json)
+        before, after = args.compare
+        compare(before, after, args.json)
     elif args.out:
         dump(args.out, args.keys)
     else:

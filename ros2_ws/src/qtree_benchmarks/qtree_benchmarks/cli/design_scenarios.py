@@ -22,7 +22,7 @@ import sys
 import time
 
 from qtree_scene.scenario import dump_scenario, load_scenario
-from qtree_scene.scene import ObjectSpec, Scenario
+from qtree_scene.scene import ObjectSpec, Role, Scenario
 from qtree_task_planner.exact import count_feasible_sequences, solve_exact
 from qtree_task_planner.oracle import MotionPlannerOracle
 
@@ -73,7 +73,7 @@ LAYOUTS = {
 }
 
 
-def cylinder(object_id: str, role: str, x: float, y: float, height: float) -> ObjectSpec:
+def cylinder(object_id: str, role: Role, x: float, y: float, height: float) -> ObjectSpec:
     """A cylinder standing on the table (top face z = 0)."""
     return ObjectSpec(
         object_id, role, 'cylinder', (x, y, height / 2), radius=RADIUS, height=height

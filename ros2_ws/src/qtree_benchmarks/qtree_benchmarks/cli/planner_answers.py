@@ -19,6 +19,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 from tqdm import tqdm
 
@@ -76,7 +77,7 @@ def main() -> int:
         )
         for line in result['changed'] + result['missing']:
             print('  ' + line)
-    summary = {
+    summary: dict[str, Any] = {
         'questions': questions,
         'scenarios': sorted(answers.scenarios(before[0])),
         'answers_changed': len(changed) + len(missing),

@@ -15,7 +15,6 @@ blocker search on infeasible answers is switched off (it does not change feasibl
 from __future__ import annotations
 
 import cProfile
-import pstats
 import time
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -29,8 +28,10 @@ from qtree_task_planner.exceptions import SearchLimitExceededError
 from qtree_task_planner.oracle import MotionPlannerOracle
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.planner import MotionPlanner
+from stpik_motion_planner.result import PlanResult
 
 from qtree_benchmarks.motion.figures import PHASES
+from qtree_benchmarks.profile_stats import raw_stats
 
 SCENARIOS = ('s1', 's2', 's3', 'gen_8_0.2_0', 'gen_8_0.2_1', 'gen_8_0.2_2')  # the benchmark's
 TIME_LIMIT_S = 600.0  # no TIMEOUT answers on a loaded machine [s]
@@ -61,6 +62,29 @@ def _fingerprint(result) -> list:
     return [round(float(result.approach_yaw), 6), len(q), round(float(q.sum()), 6)]
 
 
+class RecordingPlanner(MotionPlanner):
+    """The motion planner, handing every answer of :meth:`check` and its CPU time [s] to
+    ``record(object_id, relocated, result, cpu_s)``.
+    """
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        config: PlannerConfig,
+        record: Callable[[str, list[str], PlanResult, float], None],
+    ) -> None:
+        super().__init__(scenario, config)
+        self._record = record
+
+    def check(self, object_id: str, relocated_ids: Iterable[str]) -> PlanResult:
+        """:meth:`MotionPlanner.check`, recorded."""
+        relocated = list(relocated_ids)
+        start = time.process_time()
+        result = super().check(object_id, relocated)
+        self._record(object_id, relocated, result, time.process_time() - start)
+        return result
+
+
 def exact_answers(name: str, progress: Callable[[str], None] | None = None) -> dict:
     """Answers, CPU times [s] and motion fingerprints of one scenario's exact search.
 
@@ -70,27 +94,22 @@ def exact_answers(name: str, progress: Callable[[str], None] | None = None) -> d
         optimal level}``.
     """
     scenario = load(name)
-    planner = MotionPlanner(scenario, PlannerConfig(time_limit_s=TIME_LIMIT_S))
-    planner.blockers.annotate = lambda result, *_: result
     out: dict = {'answers': {}, 'cpu_s': {}, 'reached_stpik': {}, 'motion': {}, 'stages_s': {}}
-    check = planner.check
 
-    def timed(object_id: str, relocated):
-        relocated = list(relocated)
+    def record(object_id: str, relocated: list[str], result: PlanResult, cpu_s: float) -> None:
+        if result.from_cache:
+            return
         key = question_key(relocated, object_id)
-        start = time.process_time()
-        result = check(object_id, relocated)
-        if not result.from_cache:
-            out['cpu_s'][key] = time.process_time() - start
-            out['answers'][key] = [bool(result.feasible), result.reason.name]
-            out['reached_stpik'][key] = result.timings.get('stpik', 0.0) > 0.0
-            out['motion'][key] = _fingerprint(result)
-            out['stages_s'][key] = {k: round(v, 6) for k, v in result.timings.items()}
-            if progress is not None:
-                progress(f'{name} {key}: {result.reason.name}')
-        return result
+        out['cpu_s'][key] = cpu_s
+        out['answers'][key] = [bool(result.feasible), result.reason.name]
+        out['reached_stpik'][key] = result.timings.get('stpik', 0.0) > 0.0
+        out['motion'][key] = _fingerprint(result)
+        out['stages_s'][key] = {k: round(v, 6) for k, v in result.timings.items()}
+        if progress is not None:
+            progress(f'{name} {key}: {result.reason.name}')
 
-    planner.check = timed
+    planner = RecordingPlanner(scenario, PlannerConfig(time_limit_s=TIME_LIMIT_S), record)
+    planner.blockers.enabled = False
     oracle = MotionPlannerOracle(scenario, planner=planner)
     ids = tuple(o.id for o in scenario.obstacles)
     try:
@@ -138,7 +157,9 @@ def timing_summary(record: dict) -> dict:
     """Median / p95 CPU ms of the feasible and reached-STPIK checks of a record (and the
     feasible checks' median wall ms per stage).
     """
-    feasible, reached, stages = [], [], {}
+    feasible: list[float] = []
+    reached: list[float] = []
+    stages: dict[str, list[float]] = {}
     for part in scenarios(record).values():
         for key, seconds in part['cpu_s'].items():
             if part['answers'][key][0]:
@@ -179,7 +200,7 @@ def profiled_answers(names: Iterable[str], progress: Callable[[str], None] | Non
         out[name] = exact_answers(name, progress)
     profiler.disable()
     phases: dict[str, float] = {}
-    for (file, _, function), (_, _, _, cumulative, _) in pstats.Stats(profiler).stats.items():
+    for (file, _, function), (_, _, _, cumulative, _) in raw_stats(profiler).items():
         phase = PHASES.get((Path(file).name, function))
         if phase is not None:
             phases[phase] = round(phases.get(phase, 0.0) + cumulative, 3)

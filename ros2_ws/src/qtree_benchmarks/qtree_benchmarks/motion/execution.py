@@ -199,7 +199,8 @@ class Executor:
                 self.out.step_cpu_s.append(tick.step_cpu_s)
                 self.delay.push(self.sim.time, tick.q_ref)
                 self._tick(self.motion.ee_at(tick.target_time))
-            q_ref = controller.q_ref
+            last = controller.q_ref  # set by begin()
+            q_ref = q_ref if last is None else last
             self._grasp_or_release(attach, controller)
 
     def _open_loop(self) -> None:

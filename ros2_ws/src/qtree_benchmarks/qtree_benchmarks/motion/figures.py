@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import cProfile
-import pstats
 import random
 from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from qtree_scene.scene import Scenario
@@ -18,6 +18,7 @@ from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import PlanResult
 
 from qtree_benchmarks.motion.peers import PEERS
+from qtree_benchmarks.profile_stats import raw_stats
 
 STAGES = ('sampling', 'stpik', 'collision', 'verify')
 PHASES = {  # (file, function) -> phase reported with its cumulative profiled time
@@ -67,12 +68,14 @@ def profile_breakdown(scenario: Scenario, max_sets: int) -> dict:
     profiler.enable()
     optimal_level(planner, max_sets)
     profiler.disable()
-    stats = pstats.Stats(profiler).stats  # (file, line, name) -> (cc, nc, tt, ct, callers)
-    groups: Counter[str] = Counter()
-    functions: Counter[str] = Counter()
+    stats = raw_stats(profiler)
+    groups: dict[str, float] = {}
+    functions: dict[str, float] = {}
     for (file, line, name), (_, _, own, _, _) in stats.items():
-        groups[_category(file, name)] += own
-        functions[f'{Path(file).name}:{line}({name})' if file != '~' else name] += own
+        group = _category(file, name)
+        groups[group] = groups.get(group, 0.0) + own
+        where = f'{Path(file).name}:{line}({name})' if file != '~' else name
+        functions[where] = functions.get(where, 0.0) + own
     total = sum(groups.values())
     phases = {}
     for (file, _, name), (_, _, _, cumulative, _) in stats.items():
@@ -83,9 +86,14 @@ def profile_breakdown(scenario: Scenario, max_sets: int) -> dict:
         'scenario': scenario.name,
         'checks': len(planner.cache),
         'total_s': round(total, 3),
-        'share': {k: round(v / total, 3) for k, v in groups.most_common()},
-        'top_functions_s': {k: round(v, 3) for k, v in functions.most_common(12)},
+        'share': {k: round(v / total, 3) for k, v in _largest(groups)},
+        'top_functions_s': {k: round(v, 3) for k, v in _largest(functions)[:12]},
     }
+
+
+def _largest(seconds: dict[str, float]) -> list[tuple[str, float]]:
+    """``seconds`` as (name, s) pairs, largest first (``Counter.most_common`` for floats)."""
+    return sorted(seconds.items(), key=lambda item: -item[1])
 
 
 def _category(file: str, name: str) -> str:
@@ -116,7 +124,7 @@ def check_summary(results: list[PlanResult]) -> dict:
     """Median / p95 of uncached checks, all and feasible, and the per-stage split."""
     feasible = [r for r in results if r.feasible]
     reached = [r for r in results if r.timings.get('stpik', 0.0) > 0.0]
-    out = {'reasons': dict(Counter(r.reason.name for r in results).most_common())}
+    out: dict[str, Any] = {'reasons': dict(Counter(r.reason.name for r in results).most_common())}
     total = sum(r.planning_time for r in results) or 1.0
     pregrasp = [r for r in results if not r.feasible and r.message.startswith('pre-grasp')]
     out['time_share'] = {

@@ -19,6 +19,7 @@ release samples, non-adjacent link pairs, and the joint limits.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import fcl
 import numpy as np
@@ -31,7 +32,7 @@ from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import PlanResult
 
 VERIFY_STEP_RAD = 0.01  # largest joint change between two verified configurations [rad]
-REFERENCE_CONFIG = {
+REFERENCE_CONFIG: dict[str, Any] = {
     'approach_directions': 33,
     'approach_yaw_step_rad': 0.1,
     'max_iterations': 14,

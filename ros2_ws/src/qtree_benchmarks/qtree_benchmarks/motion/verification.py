@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import random
 import time
+from typing import Any
 
 import numpy as np
 from qtree_scene.placement import slot_position
@@ -62,9 +63,18 @@ def verify_results(
 ) -> dict:
     """Verifier figures over the feasible ``results`` of one scenario (cache items)."""
     rng = random.Random(seed)
-    out = {'trajectories': 0, 'colliding': 0, 'limit_violations': 0, 'configurations': 0}
+    out: dict[str, Any] = {
+        'trajectories': 0,
+        'colliding': 0,
+        'limit_violations': 0,
+        'configurations': 0,
+    }
     out['placed_pose_approximated'] = 0
-    gaps, times, examples, clearances, tilts = [], [], [], [], []
+    gaps: list[float] = []
+    times: list[float] = []
+    examples: list[str] = []
+    clearances: list[float] = []
+    tilts: list[float] = []
     robot = verifier.robot
     answers = {key: r for key, r in results if r.feasible}
     for (relocated, object_id), result in results:

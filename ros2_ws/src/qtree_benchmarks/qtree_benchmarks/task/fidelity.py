@@ -72,8 +72,9 @@ def claims(rows: list[dict], reading: Reading, scenarios: list[str]) -> list[dic
     """
     out = []
     for scenario in scenarios:
-        found = {p: summary_row(rows, scenario, p, reading) for p in PAPER_POLICIES}
-        if any(r is None for r in found.values()):
+        looked_up = {p: summary_row(rows, scenario, p, reading) for p in PAPER_POLICIES}
+        found = {p: r for p, r in looked_up.items() if r is not None}
+        if len(found) < len(looked_up):
             continue
         for metric in (*METRICS, 'first_optimal'):
             means = [found[p][metric][0] for p in PAPER_POLICIES]
@@ -148,13 +149,11 @@ def fidelity_report(data: dict, preset: Reading, default: Reading) -> dict:
     rows, records = data['summary'], data.get('records', [])
     scenarios = [s for s in ('s1', 's2', 's3') if any(r['scenario'] == s for r in rows)]
     meta_scenes = data['meta']['scenarios']
-    ranked = sorted(
-        (
-            {'reading': _named(r), 'cells_within_30pct': close_count(cells(rows, r, scenarios))}
-            for r in readings_of(rows)
-        ),
-        key=lambda item: -item['cells_within_30pct'],
+    counted = sorted(
+        ((close_count(cells(rows, r, scenarios)), r) for r in readings_of(rows)),
+        key=lambda pair: -pair[0],
     )
+    ranked = [{'reading': _named(r), 'cells_within_30pct': n} for n, r in counted]
 
     def block(reading: Reading) -> dict:
         chosen = cells(rows, reading, scenarios)

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from qtree_scene.generator import Layout
 from qtree_task_planner.blocker_search import BlockerSearchConfig, blocker_search
 from qtree_task_planner.exact import solve_exact
 from qtree_task_planner.exceptions import BudgetExceededError, SearchLimitExceededError
@@ -65,7 +66,7 @@ class ScaleTask:
     learner_time_s: float = 10.0
     search_max_runs: int = 3000
     search_time_s: float = 120.0
-    layout: str = 'accessible'
+    layout: Layout = 'accessible'
     grasp_families: tuple[str, ...] = ('side',)
 
 
@@ -237,10 +238,10 @@ def _run_method(method: str, task: ScaleTask, obstacles, target, scene: SceneOra
             sequence, episodes = (), 0
             record.update(finished=False, budget_hit=getattr(err, 'which', 'sets'))
     elif method == 'BLOCKER-SEARCH':
-        config = BlockerSearchConfig(
+        search_config = BlockerSearchConfig(
             max_planner_runs=task.search_max_runs, time_limit_s=task.search_time_s
         )
-        found = blocker_search(obstacles, target, oracle, config)
+        found = blocker_search(obstacles, target, oracle, search_config)
         sequence, episodes = found.sequence, found.candidates
         record.update(
             budget_hit=found.budget_hit,

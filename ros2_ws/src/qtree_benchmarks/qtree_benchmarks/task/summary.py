@@ -110,11 +110,12 @@ def paper_claims(rows: list[dict]) -> list[dict]:
         return c[0], HLRND_RULES.index(c[1]), EPSILON_COINS.index(c[2]), -c[3]
 
     for scenario, rule, coin, window in sorted(combos, key=order):
-        picked = {
+        found = {
             p: _find(rows, scenario, p, hlrnd_rule=rule, epsilon_coin=coin, steady_episodes=window)
             for p in PAPER_POLICIES
         }
-        if any(row is None for row in picked.values()):
+        picked = {p: row for p, row in found.items() if row is not None}
+        if len(picked) < len(found):
             continue
         claim: dict[str, Any] = {
             'scenario': scenario,
