@@ -14,7 +14,6 @@ from builtin_interfaces.msg import Time
 from jaco2_description.model import ARM_JOINTS, FINGER_JOINTS
 from qtree_msgs.msg import Scene
 from qtree_scene import message as scene_message
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
@@ -22,24 +21,6 @@ from jaco2_sim.exceptions import TrajectoryError
 from jaco2_sim.world import World
 
 MAX_SCANNED_NAMES = 256  # trajectory_size() stops counting points after this many joint names
-
-
-def parameter_descriptor(
-    text: str, lo: float | None = None, hi: float | None = None, **kw
-) -> ParameterDescriptor:
-    """Descriptor with ``text``, an integer range if both bounds are int, else a float one.
-
-    Args:
-        text: description, with the unit.
-        lo: lowest valid value (None: no range).
-        hi: highest valid value.
-        kw: other ParameterDescriptor fields (e.g. ``read_only=True``).
-    """
-    if isinstance(lo, int) and isinstance(hi, int):
-        kw['integer_range'] = [IntegerRange(from_value=lo, to_value=hi, step=1)]
-    elif lo is not None:
-        kw['floating_point_range'] = [FloatingPointRange(from_value=lo, to_value=hi)]
-    return ParameterDescriptor(description=text, **kw)
 
 
 def scene_msg(world: World, stamp: Time) -> Scene:

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from qtree_node_support.ranges import range_problem
 
 from jaco2_sim.exceptions import DisturbanceError
 
@@ -74,10 +75,9 @@ def _numbers(name: str, values: Sequence[Any]) -> list[float]:
 
 
 def _in_range(name: str, value: Any, low: float, high: float) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise DisturbanceError(f'{name}: a number expected, got {value!r}')
-    if not math.isfinite(value) or not low <= value <= high:
-        raise DisturbanceError(f'{name}: must be in [{low}, {high}], got {value}')
+    problem = range_problem(value, low, high)
+    if problem is not None:
+        raise DisturbanceError(f'{name}: {problem}, got {value!r}')
 
 
 @dataclass

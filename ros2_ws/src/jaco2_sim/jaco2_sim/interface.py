@@ -10,13 +10,13 @@ from collections.abc import Sequence
 from typing import Any
 
 from jaco2_description.model import urdf_text
+from qtree_node_support.parameters import range_descriptor
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile
 
-from jaco2_sim.conversions import parameter_descriptor
 from jaco2_sim.disturbances import PARAMETER_FIELDS
 from jaco2_sim.simulation import EXPECTED_ERRORS, Simulation
 
@@ -47,8 +47,8 @@ PARAMETERS: list[tuple[str, Any, tuple[Any, ...]]] = [
 
 def declare_parameters(node: Node) -> None:
     """Declare :data:`PARAMETERS` and the read-only ``robot_description`` on ``node``."""
-    params = [(n, v, parameter_descriptor(*d)) for n, v, d in PARAMETERS]
-    urdf = parameter_descriptor('URDF', read_only=True)
+    params = [(n, v, range_descriptor(*d)) for n, v, d in PARAMETERS]
+    urdf = range_descriptor('URDF', read_only=True)
     node.declare_parameters('', [*params, ('robot_description', urdf_text(), urdf)])
 
 

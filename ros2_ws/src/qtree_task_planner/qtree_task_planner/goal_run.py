@@ -31,8 +31,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from qtree_msgs.action import RetrieveTarget
+from qtree_node_support.parameters import range_descriptor
+from qtree_node_support.ranges import range_problem
 from qtree_scene.changes import clutter_objects, scene_changes
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 
 from qtree_task_planner.conversions import (
     feedback_msg,
@@ -64,18 +66,19 @@ TIMEOUT_RANGE_S = (0.1, 3600.0)
 
 def timeout_descriptor(description: str) -> ParameterDescriptor:
     """Descriptor of a timeout parameter in :data:`TIMEOUT_RANGE_S` [s]."""
-    rng = FloatingPointRange(from_value=TIMEOUT_RANGE_S[0], to_value=TIMEOUT_RANGE_S[1])
-    return ParameterDescriptor(description=description, floating_point_range=[rng])
+    return range_descriptor(description, *TIMEOUT_RANGE_S, integer=False)
 
 
 def check_parameters(params: list) -> SetParametersResult:
     """The on-set-parameters answer: every timeout a float in :data:`TIMEOUT_RANGE_S`."""
-    low, high = TIMEOUT_RANGE_S
     for param in params:
-        if param.name in TIMEOUTS and not (
-            isinstance(param.value, float) and low <= param.value <= high
-        ):
-            reason = f'{param.name} must be a float in [0.1, 3600] s, got {param.value!r}'
+        if param.name not in TIMEOUTS:
+            continue
+        problem = range_problem(param.value, *TIMEOUT_RANGE_S)
+        if problem is None and not isinstance(param.value, float):
+            problem = 'must be a float'  # the parameters are declared as doubles
+        if problem is not None:
+            reason = f'{param.name} {problem} s, got {param.value!r}'
             return SetParametersResult(successful=False, reason=reason)
     return SetParametersResult(successful=True)
 

@@ -38,6 +38,7 @@ import numpy as np
 import pinocchio as pin
 from jaco2_description.model import ARM_JOINTS, Jaco2Model
 from qtree_msgs.msg import ObjectState, Scene, TrackingState
+from qtree_node_support.parameters import range_descriptor
 from qtree_scene.changes import changes_under_relocation, clutter_objects, standing_objects
 from qtree_scene.message import scenario_from_msg
 from rcl_interfaces.msg import SetParametersResult
@@ -55,7 +56,7 @@ from stpik_motion_planner.closed_loop import (
 )
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.config import RANGES, PlannerConfig
-from stpik_motion_planner.conversions import command_msg, range_descriptor
+from stpik_motion_planner.conversions import command_msg
 from stpik_motion_planner.conversions import xyzquat_pose_msg as pose_msg
 from stpik_motion_planner.exceptions import InvalidConfig
 from stpik_motion_planner.execution import REFUSED, TrajectoryExecution, arm_speed
@@ -82,7 +83,7 @@ class Execution(TrajectoryExecution):
         node.declare_parameter('command_topic', '/joint_command')
         defaults = ExecutionConfig()
         for name, (low, high, text) in EXECUTION_RANGES.items():
-            descriptor = range_descriptor(text, low, high)
+            descriptor = range_descriptor(text, low, high, integer=False)
             node.declare_parameter(name, getattr(defaults, name), descriptor)
         node.add_on_set_parameters_callback(self._on_parameters)
         check_mode(node.get_parameter('execution_mode').value)

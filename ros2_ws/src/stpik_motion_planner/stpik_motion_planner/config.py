@@ -11,11 +11,13 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from qtree_node_support.ranges import Range, range_problem
+
 from stpik_motion_planner.exceptions import InvalidConfig
 from stpik_motion_planner.grasps import PAPER_GRASP_FAMILIES, check_families
 
 # name -> (lower, upper, description); every bound inclusive.
-RANGES: dict[str, tuple[float, float, str]] = {
+RANGES: dict[str, Range] = {
     'position_tolerance_m': (1e-4, 0.1, 'EE position tracking tolerance [m]'),
     'orientation_tolerance_rad': (1e-3, 0.5, 'EE orientation tracking tolerance [rad]'),
     'ee_gain': (0.05, 1.0, 'EE task gain K·dt per STPIK iteration (eq. 6) [-]'),
@@ -162,9 +164,6 @@ def check_value(name: str, value: object) -> None:
     if name not in RANGES:
         raise InvalidConfig(name, value, 'unknown planner setting')
     low, high, _ = RANGES[name]
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InvalidConfig(name, value, 'must be a number')
-    if name in INTEGER_FIELDS and not float(value).is_integer():
-        raise InvalidConfig(name, value, 'must be an integer')
-    if not math.isfinite(value) or not low <= value <= high:
-        raise InvalidConfig(name, value, f'must be in [{low}, {high}]')
+    problem = range_problem(value, low, high, integer=name in INTEGER_FIELDS)
+    if problem is not None:
+        raise InvalidConfig(name, value, problem)

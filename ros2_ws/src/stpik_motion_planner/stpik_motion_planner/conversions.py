@@ -15,7 +15,6 @@ from jaco2_description.model import ARM_JOINTS
 from qtree_msgs.msg import PlanningEvent
 from qtree_msgs.srv import RelocateObject
 from qtree_node_support.text import clip
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
@@ -49,24 +48,6 @@ def pose_array_msg(path: np.ndarray, frame_id: str) -> PoseArray:
         o.x, o.y, o.z, o.w = (float(v) for v in row[3:])
         msg.poses.append(pose)
     return msg
-
-
-def range_descriptor(
-    text: str, low: float, high: float, *, integer: bool = False
-) -> ParameterDescriptor:
-    """Descriptor of a parameter valid in [``low``, ``high``] (integer step 1 if ``integer``).
-
-    Args:
-        text: description, with the unit.
-        low: lowest valid value (inclusive).
-        high: highest valid value (inclusive).
-        integer: an integer parameter (else a float one).
-    """
-    if integer:
-        rng = IntegerRange(from_value=int(low), to_value=int(high), step=1)
-        return ParameterDescriptor(description=text, integer_range=[rng])
-    rng = FloatingPointRange(from_value=float(low), to_value=float(high))
-    return ParameterDescriptor(description=text, floating_point_range=[rng])
 
 
 def fill_relocate_response(

@@ -8,14 +8,15 @@ where valid values are defined. Gains are K·dt per control tick, as in eq. (6).
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
+
+from qtree_node_support.ranges import Range, range_problem
 
 from stpik_motion_planner.exceptions import InvalidConfig
 
 EXECUTION_MODES = ('open_loop', 'closed_loop')
 # name -> (lower, upper, description); every bound inclusive.
-EXECUTION_RANGES: dict[str, tuple[float, float, str]] = {
+EXECUTION_RANGES: dict[str, Range] = {
     'control_rate_hz': (10.0, 1000.0, 'closed-loop control rate [Hz]'),
     'tracking_gain': (0.01, 0.5, 'EE error correction K·dt per control tick (eq. 6) [-]'),
     'execution_set_gain': (0.01, 0.5, 'set-based task gain K·dt per control tick [-]'),
@@ -95,10 +96,9 @@ def check_execution_value(name: str, value: object) -> None:
     if name not in EXECUTION_RANGES:
         raise InvalidConfig(name, value, 'unknown execution setting')
     low, high, _ = EXECUTION_RANGES[name]
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InvalidConfig(name, value, 'must be a number')
-    if not math.isfinite(value) or not low <= value <= high:
-        raise InvalidConfig(name, value, f'must be in [{low}, {high}]')
+    problem = range_problem(value, low, high)
+    if problem is not None:
+        raise InvalidConfig(name, value, problem)
 
 
 def check_mode(value: object) -> str:

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 
+from qtree_node_support.parameters import range_descriptor
 from rcl_interfaces.msg import ParameterDescriptor, ParameterType, SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from stpik_motion_planner.config import INTEGER_FIELDS, RANGES, PlannerConfig, check_value
-from stpik_motion_planner.conversions import range_descriptor
 from stpik_motion_planner.exceptions import InvalidConfig, MotionPlannerError
 from stpik_motion_planner.grasps import GRASP_FAMILIES, check_families
 
@@ -60,7 +60,7 @@ def declare_parameters(node: Node) -> None:
         ),
     )
     for name, (value, low, high, text) in EXTRA.items():
-        node.declare_parameter(name, value, range_descriptor(text, low, high))
+        node.declare_parameter(name, value, range_descriptor(text, low, high, integer=False))
 
 
 def planner_config(node: Node) -> PlannerConfig:
