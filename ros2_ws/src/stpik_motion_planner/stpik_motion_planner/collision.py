@@ -343,7 +343,8 @@ class RobotBodies:
     @property
     def centres(self) -> np.ndarray:
         """Centre of every body [m] (G + 1, 3) at the last :meth:`place` (last row: the carried
-        object, valid while attached)."""
+        object, valid while attached).
+        """
         return self._centres
 
     def _fresh_result(self) -> fcl.DistanceResult:
@@ -407,7 +408,8 @@ class RobotBodies:
         """(rows into the scene-checked bodies, object indices) of the pairs whose lower bound
         is below ``threshold`` [m] (at or below with ``inclusive``): the distance from the
         body's centre to a box around the object in the object's frame, minus the body's
-        bounding radius (:func:`.kernels.scene_candidates`); the base is skipped."""
+        bounding radius (:func:`.kernels.scene_candidates`); the base is skipped.
+        """
         return scene_candidates(
             self._centres,
             self._all_radii,
@@ -532,7 +534,8 @@ class QueryLog:
 
     def replays_in(self, scene: SceneWorld) -> bool:
         """True when every query's cull in ``scene`` lets through exactly the pairs it did, in
-        the same order (:func:`.kernels.replay_candidates`: each query culled as it was)."""
+        the same order (:func:`.kernels.replay_candidates`: each query culled as it was).
+        """
         if not self.replayable:
             return False
         index = scene.index_of

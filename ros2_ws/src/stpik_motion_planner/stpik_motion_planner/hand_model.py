@@ -116,7 +116,8 @@ def palm_ball(robot: Jaco2Model) -> tuple[np.ndarray, float]:
 
 def bounding_sphere(points: np.ndarray) -> tuple[np.ndarray, float]:
     """A sphere containing ``points`` [m] (k, 3) (so their convex hull): the centre of their
-    bounding box [m] (3,) and the largest distance of a point from it [m]."""
+    bounding box [m] (3,) and the largest distance of a point from it [m].
+    """
     centre = (points.min(axis=0) + points.max(axis=0)) / 2
     return centre, float(np.max(np.linalg.norm(points - centre, axis=1)))
 

@@ -100,8 +100,12 @@ def self_candidates(
     gap < threshold (≤ with ``inclusive``) are returned in ascending order.
 
     Args:
-        centres: sphere centres [m] (B, 3); radii: their radii [m] (B,).
-        pair_a, pair_b: body indices of each pair (P,).
+        centres: sphere centres [m] (B, 3).
+        radii: their radii [m] (B,).
+        pair_a: first body index of each pair (P,).
+        pair_b: second body index of each pair (P,).
+        threshold: the distance below which a pair is kept [m].
+        inclusive: also keep pairs exactly at ``threshold``.
     """
     out = np.empty(pair_a.shape[0], dtype=np.int64)
     count = 0
@@ -151,10 +155,15 @@ def scene_candidates(
     Pairs with bound < threshold (≤ with ``inclusive``), body-major order (as ``np.nonzero``).
 
     Args:
-        centres, radii: bounding spheres of every robot body [m] (B, 3), (B,).
+        centres: bounding-sphere centres of every robot body [m] (B, 3).
+        radii: their radii [m] (B,).
         bodies: the bodies checked against the scene, indices into ``centres`` (K,).
-        object_centres: object centres [m] (O, 3); cos_yaw, sin_yaw: their yaw (O,).
+        object_centres: object centres [m] (O, 3).
+        cos_yaw: cosine of each object's yaw (O,).
+        sin_yaw: sine of each object's yaw (O,).
         half_extents: half sizes of the box around each object in its frame [m] (O, 3).
+        threshold: the bound below which a pair is kept [m].
+        inclusive: also keep pairs exactly at ``threshold``.
     """
     count_max = bodies.shape[0] * object_centres.shape[0]
     rows = np.empty(count_max, dtype=np.int64)
@@ -211,6 +220,9 @@ def solve_levels(
         jacobian: rows of every level, highest priority first (m, n).
         error: K_i σ̃_i of those rows (m,).
         starts: row where each level starts, then m (L + 1,); empty levels allowed.
+        damping: largest damping λ of the damped inverse [-].
+        threshold: singular value below which damping acts [-].
+        tolerance: singular value below which the projector drops a direction [-].
 
     Returns:
         The joint step q̇ (already multiplied by dt) [rad] (n,).

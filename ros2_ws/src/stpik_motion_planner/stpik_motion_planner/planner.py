@@ -189,7 +189,8 @@ class MotionPlanner:
     def slots(self, family: str) -> tuple[Slot, ...]:
         """The drop slots a relocation with a ``family`` grasp fills, in relocation order: all
         of :func:`~qtree_scene.placement.drop_slots` when the planner grasps from the side only
-        (the paper's setting), else those of :func:`~qtree_scene.placement.top_place_slots`."""
+        (the paper's setting), else those of :func:`~qtree_scene.placement.top_place_slots`.
+        """
         if 'top' not in self.config.grasp_families:
             return drop_slots(self.scenario)
         side, top = top_place_slots(self.scenario)
@@ -589,8 +590,11 @@ class MotionPlanner:
         task, eq. 6), ending within the tracking tolerance of the pose above the slot.
 
         Args:
-            q_lift, q_above: ends [rad] (7,).
+            q_lift: start, the lift's end [rad] (7,).
+            q_above: goal, the pose above the drop slot [rad] (7,).
             in_hand: the object's pose in the EE frame.
+            scene: the carry's collision scene (the carried object attached by the caller).
+            deadline: ``time.perf_counter()`` value by which to stop [s].
 
         Returns:
             Samples after ``q_lift`` [rad] (n, 7), the last one the pose above the slot.
@@ -618,7 +622,8 @@ class MotionPlanner:
 
     def _carried_tilts(self, q: np.ndarray, in_hand: pin.SE3) -> np.ndarray:
         """Angle [rad] (n,) of the carried object's axis from the world vertical at each of the
-        configurations ``q`` [rad] (n, 7)."""
+        configurations ``q`` [rad] (n, 7).
+        """
         axis = in_hand.rotation[:, 2]  # the object's z axis in the EE frame
         cosines = np.array([self.robot.ee_pose(x).rotation[2] @ axis for x in q])
         return np.arccos(np.clip(cosines, -1.0, 1.0))
@@ -633,7 +638,8 @@ class MotionPlanner:
     ) -> np.ndarray:
         """IK of the pose above the drop slot, first from the lift's end ``q_lift`` [rad] (7,)
         (its arm family: the carry transit then keeps the object upright, #29), else from the
-        ready posture turned toward the slot (before #29 the only seed)."""
+        ready posture turned toward the slot (before #29 the only seed).
+        """
         stpik = self.stpik
         try:
             return stpik.converge(q_lift, above, scene, deadline=deadline)
@@ -645,7 +651,8 @@ class MotionPlanner:
 
     def _placed(self, obj: ObjectSpec, q_release: np.ndarray, in_hand: pin.SE3) -> ObjectSpec:
         """``obj`` where the hand at ``q_release`` [rad] leaves it: position and yaw of the
-        released pose (#29: the "after" scene stood it at the commanded slot with yaw 0)."""
+        released pose (#29: the "after" scene stood it at the commanded slot with yaw 0).
+        """
         pose = self.robot.ee_pose(q_release) * in_hand
         yaw = math.atan2(pose.rotation[1, 0], pose.rotation[0, 0])
         return dataclasses.replace(obj, position=tuple(pose.translation), yaw=yaw)
@@ -733,7 +740,8 @@ def _unplaceable(
     obj: ObjectSpec, index: int, slots: dict[str, tuple[Slot, ...]]
 ) -> MotionPlannerError | None:
     """NO_PLACEMENT (no family has slot ``index``) / OBJECT_TOO_BIG before any planning, else
-    None. ``slots``: per grasp family, its slots (:meth:`MotionPlanner.slots`)."""
+    None. ``slots``: per grasp family, its slots (:meth:`MotionPlanner.slots`).
+    """
     if all(index >= len(s) for s in slots.values()):
         family, most = max(slots.items(), key=lambda item: len(item[1]))
         return _no_slot(obj, index, most, family)
@@ -749,7 +757,8 @@ def _unplaceable(
 def _most_informative(failures: list[MotionPlannerError], object_id: str) -> MotionPlannerError:
     """A verifier rejection first, else the first STPIK failure, else the first sampling one;
     OBJECT_TOO_BIG (an approach at which the object is too wide) or NO_PLACEMENT (a grasp family
-    whose slots are full) only when every approach was."""
+    whose slots are full) only when every approach was.
+    """
     others = [err for err in failures if not isinstance(err, (ObjectTooBig, NoPlacement))]
     failures = others or failures
     for err in failures:

@@ -145,7 +145,8 @@ class RobustStpik(Stpik):
         self, key: tuple, scene: tuple, log: list[SceneQuery], ok: bool, value, args: tuple
     ) -> None:
         """Remember an outcome under ``key``, within :data:`MEMO_QUERIES` (oldest dropped);
-        one of more than :data:`MEMO_ENTRY_QUERIES` queries is reused in its own scene only."""
+        one of more than :data:`MEMO_ENTRY_QUERIES` queries is reused in its own scene only.
+        """
         queries = QueryLog(log) if len(log) <= MEMO_ENTRY_QUERIES else None
         outcome = _Outcome(scene, queries, ok, value, args)
         entries = self._memo.setdefault(key, [])
@@ -160,7 +161,8 @@ class RobustStpik(Stpik):
 
     def _key(self, name: str, *arrays: np.ndarray, extra: tuple = ()) -> tuple:
         """Hashable identity of a deterministic question without its scene: arrays by value,
-        the carried object, the configuration's values."""
+        the carried object, the configuration's values.
+        """
         config = self.config
         return (
             name,
@@ -255,7 +257,8 @@ class RobustStpik(Stpik):
 
     def valid(self, q: np.ndarray, scene: SceneWorld) -> bool:
         """Within the joint limits, and the self-hit and scene pairs beyond their *activation*
-        distances (what the straight :meth:`~.stpik.Stpik.transit` requires)."""
+        distances (what the straight :meth:`~.stpik.Stpik.transit` requires).
+        """
         if np.any(q < self.lower) or np.any(q > self.upper):
             return False
         # Collision only (#28): placements without Jacobians (bit-identical to those of

@@ -195,7 +195,8 @@ class Stpik:
         self, position: np.ndarray, q1: float, ready: np.ndarray = READY
     ) -> np.ndarray:
         """``ready`` (:data:`READY`, or :data:`READY_TOP` for a top grasp) turned to the azimuth
-        of ``position`` [m], joint 1 nearest ``q1``."""
+        of ``position`` [m], joint 1 nearest ``q1``.
+        """
         reference = np.array(ready, dtype=float)
         turned = reference[0] - math.atan2(position[1], position[0])
         turned += 2 * math.pi * round((q1 - turned) / (2 * math.pi))
@@ -205,7 +206,8 @@ class Stpik:
     def nearest_turn(self, q: np.ndarray, near: np.ndarray) -> np.ndarray:
         """``q`` [rad] (7,) with each continuous joint turned by whole turns (2π) to lie within
         π of ``near`` [rad] (7,): the same arm pose, reached from ``near`` by the shortest
-        joint line (#29: a carry transit wound joint 7 by 4π and flipped the carried object)."""
+        joint line (#29: a carry transit wound joint 7 by 4π and flipped the carried object).
+        """
         q = np.array(q, dtype=float)
         free = np.isinf(self.lower)
         q[free] += 2 * math.pi * np.round((near[free] - q[free]) / (2 * math.pi))
@@ -279,7 +281,8 @@ class Stpik:
 
     def _may_activate(self, k: Kinematics) -> list:
         """The set-based tasks that can give a row at ``k`` (:meth:`SetBasedTask.may_activate`),
-        so that the usual step, with none outside its valid set, computes no task rows."""
+        so that the usual step, with none outside its valid set, computes no task rows.
+        """
         return [t for t in (self.joint_limits, self.self_hit, self.obstacles) if t.may_activate(k)]
 
     def step(
@@ -537,7 +540,8 @@ class Stpik:
         """Place the collision bodies at ``q`` [rad] (7,), for :meth:`kinematics` and the
         collision-only checks of transits and RRTConnect: one compiled forward-kinematics call
         (:func:`.kernels.chain_placements`, #28), no Pinocchio data touched, so a
-        configuration's bodies are placed the same way whichever check asks."""
+        configuration's bodies are placed the same way whichever check asks.
+        """
         chain = self._chain
         frames, placements = chain_placements(
             np.ascontiguousarray(q, dtype=float), chain[0], chain[1], chain[2]
@@ -589,7 +593,8 @@ class Stpik:
 
 def joint_segment(q_a: np.ndarray, q_b: np.ndarray, step_rad: float) -> np.ndarray:
     """Straight joint-space samples after ``q_a`` up to ``q_b`` [rad], shape (n, 7), at most
-    ``step_rad`` [rad] apart on every joint."""
+    ``step_rad`` [rad] apart on every joint.
+    """
     n = max(1, math.ceil(float(np.max(np.abs(q_b - q_a))) / step_rad))
     return np.array([q_a + (q_b - q_a) * t for t in np.arange(1, n + 1) / n])
 

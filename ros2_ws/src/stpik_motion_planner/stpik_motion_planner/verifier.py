@@ -159,7 +159,7 @@ def revolute_limits() -> dict[str, tuple[float, float]]:
 
 
 def _coal_geometry(obj: ObjectSpec, shorten_bottom: float = 0.0) -> tuple[object, float]:
-    """coal primitive of ``obj`` and its centre's z offset [m] when shortened at the bottom."""
+    """Coal primitive of ``obj`` and its centre's z offset [m] when shortened at the bottom."""
     height = obj.height if obj.shape == 'cylinder' else obj.size[2]
     cut = min(shorten_bottom, 0.5 * height)
     short = max(height - cut, 1e-4)
@@ -229,7 +229,8 @@ class TrajectoryVerifier:
 
     def _build(self, obstacles: list[ObjectSpec], carried: Carried | None, q_grasp, q_release):
         """Private GeometryModel, body names, pair reaches and kinds, and per phase (before /
-        during / after the carry) the mask of the pairs it checks."""
+        during / after the carry) the mask of the pairs it checks.
+        """
         gm = pin.GeometryModel()
         robot_ids = []
         for g in self.robot.geometry_model.geometryObjects:

@@ -105,7 +105,8 @@ class SetBasedTask(Task):
 
     def may_activate(self, k: Kinematics) -> bool:
         """False only when :meth:`compute` gives no row at ``k`` (a cheap test: the STPIK step
-        skips the task then, #28); the default computes it."""
+        skips the task then, #28); the default computes it.
+        """
         return bool(self.compute(k).dim)
 
     def compute(self, k: Kinematics) -> TaskRows:
