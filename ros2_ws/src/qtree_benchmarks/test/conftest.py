@@ -6,6 +6,7 @@ import pytest
 from jaco2_description.model import Jaco2Model
 from qtree_scene.scene import Scenario
 from qtree_scene.testing import boxed_scenario, free_scenario
+from stpik_motion_planner.testing import unhurried_planner  # noqa: F401 (autouse fixture)
 
 
 @pytest.fixture(scope='session')
@@ -24,20 +25,3 @@ def free_scene() -> Scenario:
 def boxed_scene() -> Scenario:
     """The target boxed in on every side by six obstacles 8 cm away."""
     return boxed_scenario()
-
-
-@pytest.fixture(autouse=True)
-def unhurried_planner(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Planners built with the default config get 120 s, not 5 s, per check.
-
-    Unit tests check answers, not speed (the benchmarks measure it): on a loaded 2-core machine
-    (CI beside other jobs, load 7.8) the 5 s default turned feasible checks into TIMEOUT
-    (``test_fix13_the_carry_keeps_the_object_near_upright``,
-    ``test_blocker_sweeps_cover_the_top_approaches``). Tests of the deadline set
-    ``time_limit_s`` themselves.
-    """
-    from stpik_motion_planner.config import PlannerConfig
-
-    defaults = PlannerConfig.__init__.__kwdefaults__
-    assert defaults is not None and 'time_limit_s' in defaults
-    monkeypatch.setitem(defaults, 'time_limit_s', 120.0)
