@@ -10,6 +10,7 @@ accepts from a parameter, a config built in code or a request is valid in all th
 from __future__ import annotations
 
 import math
+from collections.abc import Collection, Mapping
 
 Range = tuple[float, float, str]  # (lowest, highest valid value, description with the unit)
 
@@ -34,3 +35,26 @@ def range_problem(value: object, low: float, high: float, *, integer: bool = Fal
     if not math.isfinite(value) or not low <= value <= high:
         return f'must be in [{low}, {high}]'
     return None
+
+
+def setting_problem(
+    table: Mapping[str, Range],
+    name: str,
+    value: object,
+    *,
+    kind: str,
+    integer_fields: Collection[str] = (),
+) -> str | None:
+    """Why ``value`` is not valid for setting ``name`` of ``table``, or None when it is.
+
+    Args:
+        table: setting name -> :data:`Range`.
+        name: the setting.
+        value: the value given.
+        kind: what the table configures, for the message (``'unknown planner setting'``).
+        integer_fields: the settings of ``table`` that count something.
+    """
+    if name not in table:
+        return f'unknown {kind} setting'
+    low, high, _ = table[name]
+    return range_problem(value, low, high, integer=name in integer_fields)

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 from qtree_node_support.parameters import range_descriptor
-from qtree_node_support.ranges import range_problem
+from qtree_node_support.ranges import range_problem, setting_problem
 
 
 @pytest.mark.parametrize(
@@ -61,3 +61,15 @@ def test_the_descriptor_declares_the_same_bounds() -> None:
     assert forced.floating_point_range[0].to_value == 1000.0 and not forced.integer_range
     plain = range_descriptor('URDF', read_only=True)
     assert plain.read_only and not plain.floating_point_range and not plain.integer_range
+
+
+def test_a_setting_is_looked_up_in_its_table_first() -> None:
+    table = {'gain': (0.0, 1.0, 'gain [-]'), 'restarts': (0, 20, 'restarts [count]')}
+    assert setting_problem(table, 'gain', 0.5, kind='planner') is None
+    assert setting_problem(table, 'gian', 0.5, kind='planner') == 'unknown planner setting'
+    assert setting_problem(table, 'gain', 2.0, kind='planner') == 'must be in [0.0, 1.0]'
+    integers = {'restarts'}
+    assert setting_problem(table, 'restarts', 2.5, kind='x', integer_fields=integers) == (
+        'must be an integer'
+    )
+    assert setting_problem(table, 'restarts', 2.5, kind='x') is None

@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from qtree_node_support.ranges import Range, range_problem
+from qtree_node_support.ranges import Range, setting_problem
 
 from stpik_motion_planner.exceptions import InvalidConfig
 from stpik_motion_planner.grasps import PAPER_GRASP_FAMILIES, check_families
@@ -161,9 +161,6 @@ def check_value(name: str, value: object) -> None:
     Raises:
         InvalidConfig: unknown name, wrong type, not finite, or out of range.
     """
-    if name not in RANGES:
-        raise InvalidConfig(name, value, 'unknown planner setting')
-    low, high, _ = RANGES[name]
-    problem = range_problem(value, low, high, integer=name in INTEGER_FIELDS)
+    problem = setting_problem(RANGES, name, value, kind='planner', integer_fields=INTEGER_FIELDS)
     if problem is not None:
         raise InvalidConfig(name, value, problem)

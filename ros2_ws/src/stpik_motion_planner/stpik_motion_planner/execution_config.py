@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from qtree_node_support.ranges import Range, range_problem
+from qtree_node_support.ranges import Range, setting_problem
 
 from stpik_motion_planner.exceptions import InvalidConfig
 
@@ -93,10 +93,7 @@ def check_execution_value(name: str, value: object) -> None:
     Raises:
         InvalidConfig: unknown name, not a finite number, or out of range.
     """
-    if name not in EXECUTION_RANGES:
-        raise InvalidConfig(name, value, 'unknown execution setting')
-    low, high, _ = EXECUTION_RANGES[name]
-    problem = range_problem(value, low, high)
+    problem = setting_problem(EXECUTION_RANGES, name, value, kind='execution')
     if problem is not None:
         raise InvalidConfig(name, value, problem)
 
