@@ -41,17 +41,10 @@ def test_extracted_sequence_is_feasible_and_never_shorter_than_exact(
     assert result.planner_runs <= result.mp_calls
 
 
-@SETTINGS
-@given(
-    table_seed=st.integers(0, 10_000),
-    n_obstacles=st.integers(2, 6),
-    policy=st.sampled_from(['H-EG', 'H-EG-SET']),
-    seed=st.integers(0, 2**31),
-)
-def test_epsilon_greedy_finds_the_exact_optimum_level(
-    table_seed: int, n_obstacles: int, policy: str, seed: int
-) -> None:
-    obstacles, requirements = random_requirements(n_obstacles, np.random.default_rng(table_seed))
+def _train_level(
+    requirements: dict, obstacles: tuple[str, ...], policy: str, seed: int
+) -> tuple[int, int]:
+    """(learned sequence length, exact optimum level) of one training on a table."""
     exact = solve_exact(obstacles, 'T', TableOracle(requirements))
     result = train(
         (*obstacles, 'T'),
@@ -59,7 +52,47 @@ def test_epsilon_greedy_finds_the_exact_optimum_level(
         TableOracle(requirements),
         TrainingConfig(policy=policy, seed=seed, steady_episodes=100),
     )
-    assert len(result.sequence) == exact.level
+    return len(result.sequence), exact.level
+
+
+@SETTINGS
+@given(
+    table_seed=st.integers(0, 10_000),
+    n_obstacles=st.integers(2, 6),
+    seed=st.integers(0, 2**31),
+)
+def test_epsilon_greedy_set_finds_the_exact_optimum_level(
+    table_seed: int, n_obstacles: int, seed: int
+) -> None:
+    obstacles, requirements = random_requirements(n_obstacles, np.random.default_rng(table_seed))
+    learned, exact = _train_level(requirements, tuple(obstacles), 'H-EG-SET', seed)
+    assert learned == exact
+
+
+def test_paper_epsilon_greedy_can_settle_one_level_long() -> None:
+    """The paper's H-εG is a heuristic: on this table it settles on a feasible sequence with an
+    unneeded free object first (level 5, optimum 4), where H-εG-SET finds the optimum (#26:
+    hypothesis drew this example and the old property, optimum for H-εG too, failed)."""
+    obstacles, requirements = random_requirements(6, np.random.default_rng(53))
+    assert _train_level(requirements, tuple(obstacles), 'H-EG', 3359447) == (5, 4)
+    assert _train_level(requirements, tuple(obstacles), 'H-EG-SET', 3359447) == (4, 4)
+
+
+def test_paper_epsilon_greedy_is_optimal_on_most_random_tables() -> None:
+    """30 fixed random tables: H-εG reached the optimum on 30 (300 of 300 random draws too);
+    at least 27 asserted, so one heuristic miss like the one above does not fail it."""
+    rng = np.random.default_rng(2026)
+    optimal = 0
+    for _ in range(30):
+        table_seed, n_obstacles = int(rng.integers(0, 10_000)), int(rng.integers(2, 7))
+        obstacles, requirements = random_requirements(
+            n_obstacles, np.random.default_rng(table_seed)
+        )
+        learned, exact = _train_level(
+            requirements, tuple(obstacles), 'H-EG', int(rng.integers(0, 2**31))
+        )
+        optimal += learned == exact
+    assert optimal >= 27
 
 
 @SETTINGS
