@@ -42,6 +42,7 @@ from typing import Any, TypeVar
 import rclpy
 import rclpy.logging
 from rclpy.context import Context
+from rclpy.exceptions import InvalidHandle
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
@@ -140,7 +141,7 @@ def run_node(
         executor = (make_executor or (lambda c: SingleThreadedExecutor(context=c)))(context)
         executor.add_node(node)
         while context.ok() and not StopRequest.requested():  # checked every SPIN_POLL_S
-            executor.spin_once(timeout_sec=SPIN_POLL_S)
+            _spin_once(executor, node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except startup_errors as err:
@@ -164,6 +165,22 @@ def run_node(
         if own_process:  # answered: a later run in this process starts afresh; a request that
             StopRequest.clear()  # comes before it calls run_node still stops it at once
     return code
+
+
+def _spin_once(executor: Executor, node: Node) -> None:
+    """One ``spin_once`` that outlives an entity destroyed by a worker thread meanwhile.
+
+    A node that creates and destroys a subscription or timer in a service callback (the motion
+    planner's /joint_states while executing) races the executor, which builds its wait set from
+    the node's entities on this thread: rclpy raises ``InvalidHandle`` ("destruction was
+    requested") when one is destroyed between the two (CI, #26). The next ``spin_once`` builds
+    the wait set without it, so the loop goes on; nothing else raises ``InvalidHandle`` in a
+    node whose context is valid.
+    """
+    try:
+        executor.spin_once(timeout_sec=SPIN_POLL_S)
+    except InvalidHandle as err:
+        node.get_logger().debug(f'an entity went away while the executor waited: {err}')
 
 
 def _request_stop(signum: int, frame: Any) -> None:

@@ -49,6 +49,43 @@ def test_shutdown_from_another_thread_always_exits_0(threads: int) -> None:
     assert len(cleaned) == 15
 
 
+def test_entities_destroyed_by_worker_threads_do_not_end_the_node() -> None:
+    """Three threads create and destroy a subscription (what the motion planner does with
+    /joint_states per execution) while a 2 kHz timer keeps the executor rebuilding its wait set:
+    before the fix run_node raised InvalidHandle within a few seconds (as in CI)."""
+    context = Context()
+    stop = threading.Event()
+    rounds = [0]
+
+    def make(c=context):
+        node = rclpy.create_node('churn', context=c)
+        topic = f'churn_{id(node)}'
+
+        def churn() -> None:
+            while not stop.is_set() and c.ok():
+                sub = node.create_subscription(String, topic, lambda _: None, 10)
+                threading.Event().wait(0.0005)
+                node.destroy_subscription(sub)
+                rounds[0] += 1
+
+        for _ in range(3):
+            threading.Thread(target=churn, daemon=True).start()
+        pub = node.create_publisher(String, topic, 10)
+        node.create_subscription(String, topic, lambda _: None, 10)
+        node.create_timer(0.0005, lambda: pub.publish(String(data='x')))
+        _shutdown_later(c, 5.0)
+        return node
+
+    try:
+        code = run_node(
+            make, make_executor=lambda c: MultiThreadedExecutor(context=c), context=context
+        )
+    finally:
+        stop.set()
+    assert code == 0
+    assert rounds[0] > 500  # the churn went on the whole time (about 1 000 rounds here)
+
+
 def test_an_error_while_running_is_not_hidden() -> None:
     context = Context()
 
