@@ -26,23 +26,35 @@ around the envelopes of R in slots 0 … |R|−1; and
   plan must pass. (It replaced a swept-volume test of the arm's bounding boxes, which dropped
   almost every answer in the clutter: the boxes of a carry over the table hold most of it.)
 * **infeasible, OBJECT_TOO_BIG**: decided from ``o``'s size and the hand only (o unchanged).
-* **infeasible, blocked_by_immovable** (no approach works even with every movable object
-  removed): decided in the statics-only scene of :mod:`.blockers`, which holds no movable
-  object; statics, home and drop slots are unchanged, so that computation gives the same.
-* any other infeasible answer is dropped: the planner's search (RRT-connect detours, IK
-  restarts) may have touched any part of the workspace, so no region bounds what it depended on.
+* **any other infeasible answer** (the planner's search failed, ``blocked_by_immovable`` too:
+  RRT-connect detours, IK restarts, every approach) when its plan would go exactly as it went
+  (:func:`replays`): the plan recorded every scene query it made (:mod:`.footprint`); no object
+  one of them met changed, no changed object as it stands now comes within reach of one of
+  them, the unchanged objects keep their order and the tallest movable object standing (it sets
+  the carry height) is as high. WHY it is still true: each query of the plan, asked again in
+  the new scene, finds the same objects within its threshold in the same order (its result
+  depends on those only), so each computation step, and the answer, is the same bit for bit
+  (the planner is deterministic: its random restarts and RRT-connect are seeded by the
+  question, :func:`.rrt_connect.question_seed`). Its blockers are derived again from the sweeps
+  (:meth:`.blockers.BlockerFinder.adopt`). Answers whose plan was not wholly recorded (the
+  verifier ran, a memo result without its queries) are dropped.
+  (``blocked_by_immovable`` answers were kept on their own before: the statics-only sweeps try
+  every other approach only, and the answer's message names the movable objects in the way,
+  which a fresh planner then named otherwise: the replanning benchmark's fresh re-check found it.)
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from qtree_scene.placement import drop_slots
+from qtree_scene.placement import drop_slots, top_place_slots
 from qtree_scene.scene import ObjectSpec, Scenario
 
+from stpik_motion_planner.footprint import PlannedAnswer
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.verifier import Carried
 
@@ -70,14 +82,58 @@ def scene_blocks_reuse(old: Scenario, new: Scenario, changed: list[ObjectSpec]) 
     return ''
 
 
-def same_slots(old: Scenario, new: Scenario) -> int:
-    """How many leading drop slots (in relocation order) ``old`` and ``new`` share [-]."""
-    count = 0
-    for a, b in zip(drop_slots(old), drop_slots(new), strict=False):
-        if a != b:
-            break
-        count += 1
-    return count
+def same_slots(old: Scenario, new: Scenario, families: Sequence[str] = ('side',)) -> int:
+    """How many leading drop slots (in relocation order) ``old`` and ``new`` share [-]: of
+    :func:`~qtree_scene.placement.drop_slots` and, for a planner whose grasp ``families``
+    include ``'top'``, of both lists of :func:`~qtree_scene.placement.top_place_slots` (the
+    fewest).
+    """
+
+    def leading(a: Sequence, b: Sequence) -> int:
+        count = 0
+        for x, y in zip(a, b, strict=False):
+            if x != y:
+                break
+            count += 1
+        return count
+
+    lists = [(drop_slots(old), drop_slots(new))]
+    if 'top' in families:
+        lists += zip(top_place_slots(old), top_place_slots(new), strict=True)
+    return min(leading(a, b) for a, b in lists)
+
+
+def same_order(old: Scenario, new: Scenario, changed: set[str]) -> bool:
+    """Whether the objects not in ``changed`` come in the same order in both scenes (the
+    scene worlds, and so the culls' pairs, follow the scene's order).
+    """
+    return [o.id for o in old.objects if o.id not in changed] == [
+        o.id for o in new.objects if o.id not in changed
+    ]
+
+
+def tallest_movable(planner: Any, key: CacheKey) -> float | None:
+    """Top [m] of the tallest non-static body standing while ``key`` is planned (it sets the
+    height of the carry, :meth:`.planner.MotionPlanner._sample_path`), None without one.
+    """
+    relocated, object_id = key
+    standing = planner.planning_scene(object_id, relocated)
+    return max((o.top_z for o in standing if o.role != 'static'), default=None)
+
+
+def replays(
+    planned: PlannedAnswer | None, before: list[ObjectSpec], now: list[ObjectSpec]
+) -> bool:
+    """Whether the plan of ``planned`` makes the same scene queries once the changed objects
+    ``before`` (as they stood) are replaced by ``now`` (as they stand): every query was recorded,
+    none met an object of ``before``, and none can reach one of ``now``
+    (:meth:`.footprint.Region.may_meet`, conservative). The caller checks the rest (order,
+    tallest movable, drop slots, the answer's own objects).
+    """
+    if planned is None or not planned.region.complete:
+        return False
+    region = planned.region
+    return not any(o in region.met for o in before) and not any(map(region.may_meet, now))
 
 
 def kept_because(
@@ -86,6 +142,7 @@ def kept_because(
     changed: set[str],
     clear: Callable[[], bool],
     slots: int,
+    replay: Callable[[], bool] = lambda: False,
 ) -> str:
     """Why the cached answer ``result`` of ``key`` is still true, or '' when it must be dropped.
 
@@ -96,6 +153,8 @@ def kept_because(
         clear: whether the answer's motion keeps the verifier's clearance from the changed
             objects as they are now (called for feasible answers only, :func:`clear_of_changes`).
         slots: how many leading drop slots are unchanged (:func:`same_slots`).
+        replay: whether the infeasible answer's plan would go as it went (called for search
+            failures only, :func:`replays`).
     """
     relocated, object_id = key
     if object_id in changed or relocated & changed or len(relocated) >= slots:
@@ -106,8 +165,8 @@ def kept_because(
         return 'its verified motion verified again among the changed objects as they are now'
     if result.reason == Reason.OBJECT_TOO_BIG:
         return "decided by the object's size and the hand only"
-    if result.blocked_by_immovable:
-        return 'decided in the statics-only scene, which is unchanged'
+    if replay():
+        return 'its plan, asked again, makes the same scene queries (none meets a change)'
     return ''
 
 
@@ -116,6 +175,8 @@ def reuse_answers(
     new: Scenario,
     entries: Mapping[CacheKey, PlanResult],
     clear_of: Callable[[CacheKey, PlanResult], bool],
+    replays_of: Callable[[CacheKey], bool] = lambda key: False,
+    families: Sequence[str] = ('side',),
 ) -> tuple[dict[CacheKey, PlanResult], str]:
     """The answers of ``entries`` (made in ``old``) still true in ``new``, and a summary line.
 
@@ -125,6 +186,8 @@ def reuse_answers(
         entries: the cached answers by ``(frozenset(relocated), object id)``.
         clear_of: whether a feasible answer's motion is clear of the changed objects now
             (:func:`clear_of_changes`).
+        replays_of: whether an infeasible answer's plan would go as it went (:func:`replays`).
+        families: the planner's grasp families (which drop slots it fills, :func:`same_slots`).
     """
     ids, specs = changed_objects(old, new)
     if not entries:
@@ -132,11 +195,18 @@ def reuse_answers(
     why_not = scene_blocks_reuse(old, new, specs)
     if why_not:
         return {}, f'kept 0 of {len(entries)} cached answers: {why_not}'
-    slots = same_slots(old, new)
+    slots = same_slots(old, new, families)
     kept = {
         key: result
         for key, result in entries.items()
-        if kept_because(key, result, ids, functools.partial(clear_of, key, result), slots)
+        if kept_because(
+            key,
+            result,
+            ids,
+            functools.partial(clear_of, key, result),
+            slots,
+            functools.partial(replays_of, key),
+        )
     }
     names = ', '.join(sorted(ids)) or 'nothing'
     return kept, f'kept {len(kept)} of {len(entries)} cached answers (changed: {names})'
@@ -161,14 +231,45 @@ def carry_over(old: Any, new: Any) -> str:
     The verifications run on ``new``'s robot model (same arm): a check may still be running on
     ``old``'s, and ``new`` serves no request before this returns.
     """
-    ids, _ = changed_objects(old.scenario, new.scenario)
+    if old.config != new.config:
+        return f'kept 0 of {len(old.cache)} cached answers: another planner configuration'
+    families = new.config.grasp_families
+    ids, specs = changed_objects(old.scenario, new.scenario)
     now = [o for o in new.scenario.objects if o.id in ids]  # the changed ones, as they stand
+    before = [o for o in old.scenario.objects if o.id in ids]  # and as they stood
+    sweeps_kept = (
+        not scene_blocks_reuse(old.scenario, new.scenario, specs)
+        and same_slots(old.scenario, new.scenario, families) >= 1  # the sweeps use slot 0
+    )
+    if sweeps_kept:
+        new.blockers.adopt(old.blockers, ids, now)
+    in_order = same_order(old.scenario, new.scenario, ids)
 
     def clear_of(key: CacheKey, result: PlanResult) -> bool:
         return clear_of_changes(new, result, key[1], now)
 
+    def replays_of(key: CacheKey) -> bool:
+        needs_sweeps = new.blockers.enabled and key[1] not in new.blockers.sweeps
+        return (
+            in_order
+            and not needs_sweeps  # its blockers come from the adopted sweeps, no planning
+            and replays(old.footprints.get(key), before, now)
+            and tallest_movable(old, key) == tallest_movable(new, key)
+        )
+
     entries = dict(old.cache.items())
-    kept, summary = reuse_answers(old.scenario, new.scenario, entries, clear_of)
-    for (relocated, object_id), result in kept.items():
+    kept, summary = reuse_answers(
+        old.scenario, new.scenario, entries, clear_of, replays_of, families
+    )
+    for key, result in kept.items():
+        relocated, object_id = key
+        planned = old.footprints.get(key)
+        swept = not new.blockers.enabled or object_id in new.blockers.sweeps
+        if planned is not None and swept:  # an infeasible answer: its blockers now (no planning)
+            annotated = new.blockers.annotate(planned.result, object_id, relocated)
+            result = dataclasses.replace(
+                annotated, planning_time=result.planning_time, cpu_time=result.cpu_time
+            )
+            new.footprints[key] = planned
         new.cache.put(object_id, relocated, result)
     return summary

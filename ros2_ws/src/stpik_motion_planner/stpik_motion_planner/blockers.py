@@ -28,11 +28,12 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+from qtree_scene.scene import ObjectSpec
 
 from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.result import PlanResult, Reason, ReasonFamily, reason_family
@@ -51,16 +52,19 @@ class Sweep:
 
     Attributes:
         yaw: approach yaw [rad].
-        family: grasp family of the approach (:mod:`.grasps`).
         works: the motion exists in the statics-only scene.
         distances: movable object id -> smallest distance to the swept arm or carried object
             [m], only objects closer than :data:`NEAR_MARGIN_M`.
+        family: grasp family of the approach (:mod:`.grasps`).
+        motion: the statics-only answer swept (None when it does not work), kept to measure
+            the distances again after a scene change (:meth:`BlockerFinder.adopt`).
     """
 
     yaw: float
     works: bool
     distances: dict[str, float]
     family: str = 'side'
+    motion: PlanResult | None = field(default=None, compare=False, repr=False)
 
     def blockers(self, relocated: frozenset[str], margin: float) -> list[str]:
         """Ids within ``margin`` [m] of the sweep that are not relocated."""
@@ -223,8 +227,43 @@ class BlockerFinder:
                 out.append(Sweep(approach.yaw, False, {}, approach.family))
                 continue
             distances = self._distances(result, obj, full)
-            out.append(Sweep(approach.yaw, True, distances, approach.family))
+            out.append(Sweep(approach.yaw, True, distances, approach.family, result))
         return True
+
+    def adopt(self, old: BlockerFinder, changed: set[str], now: Iterable[ObjectSpec]) -> int:
+        """Take the complete sweeps of ``old`` for the objects not in ``changed``; the number of
+        objects whose sweeps were taken.
+
+        The caller makes sure that the two planners share the statics, home and drop slot 0
+        (:mod:`.answer_reuse`). WHY a sweep stays true: it is planned with every movable object
+        removed, so its motion depends on the statics, home, slot 0 and the object only (all
+        unchanged); its distances are those of the unchanged objects (same poses) and of the
+        changed ones measured again here along the same motion, as they stand ``now``.
+
+        Args:
+            old: the blocker finder of the planner of the scene before the change.
+            changed: ids of the objects that moved, appeared or disappeared.
+            now: the changed objects as they stand in this finder's scene.
+        """
+        now = [o for o in now if o.role != 'static']
+        taken = 0
+        for object_id, sweeps in old.sweeps.items():
+            if object_id in changed or object_id in self.sweeps:
+                continue
+            obj = self.planner.scenario.object(object_id)
+            world = SceneWorld(o for o in now if o.id != object_id)
+            adopted = []
+            for sweep in sweeps:
+                distances = {i: d for i, d in sweep.distances.items() if i not in changed}
+                if sweep.works and world.objects:
+                    if sweep.motion is None:
+                        break  # a sweep made before motions were kept: cannot be measured
+                    distances.update(self._distances(sweep.motion, obj, world))
+                adopted.append(replace(sweep, distances=distances))
+            else:
+                self.sweeps[object_id] = adopted
+                taken += 1
+        return taken
 
     def _distances(self, result: PlanResult, obj, scene: SceneWorld) -> dict[str, float]:
         """Smallest distance of each movable object to the arm along ``result``'s motion [m]."""

@@ -161,7 +161,9 @@ class CartesianSampler:
         point = np.asarray(point, dtype=float)
         self._ball.setTranslation(point)
         margin = self.config.obstacle_min_distance_m
-        return not self.movable.probe_hits(self._ball, point, self.hand.ball_radius, margin)
+        ball = self._ball_geometry
+        hits = self.movable.probe_hits(self._ball, point, self.hand.ball_radius, margin, ball)
+        return not hits
 
     def segment_free(self, a: np.ndarray, b: np.ndarray) -> bool:
         """True when the palm ball swept from ``a`` to ``b`` [m] clears the movable bodies."""
@@ -189,9 +191,10 @@ class CartesianSampler:
             body = fcl.CollisionObject(geometry, transform)
             centre, radius = spheres[name]
             world_centre = rotation @ centre + translation
-            hit += self.scene.probe_hits(body, world_centre, radius, margin)
+            hit += self.scene.probe_hits(body, world_centre, radius, margin, geometry)
             if movable_margin_m is not None and movable_margin_m > margin:
-                hit += self.movable.probe_hits(body, world_centre, radius, movable_margin_m)
+                wider = movable_margin_m
+                hit += self.movable.probe_hits(body, world_centre, radius, wider, geometry)
         return sorted(set(hit))
 
     def poses_free(self, poses: list[pin.SE3]) -> bool:

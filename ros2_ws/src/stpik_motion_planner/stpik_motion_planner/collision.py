@@ -13,7 +13,7 @@ import math
 import sys
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import fcl
 import numpy as np
@@ -116,12 +116,13 @@ class SceneWorld:
         specs = list(self.objects.values())
         self.specs = specs  # the objects in manager order (index = object index of the culls)
         self.index_of = {obj: i for i, obj in enumerate(specs)}  # object -> its index
-        self.recorders: list[list[SceneQuery]] = []  # logs of probe_hits (the sampler memo)
+        # Logs of probe_hits: the sampler memo's lists, an answer's footprint (.footprint).
+        self.recorders: list[QueryRecorder] = []
         self.ids = [obj.id for obj in specs]
         self.centres = np.array([obj.position for obj in specs], dtype=float).reshape(-1, 3)
         self.cos = np.array([math.cos(obj.yaw) for obj in specs], dtype=float)
         self.sin = np.array([math.sin(obj.yaw) for obj in specs], dtype=float)
-        self.half = np.array([_half_extents(obj) for obj in specs], dtype=float).reshape(-1, 3)
+        self.half = np.array([cull_half_extents(obj) for obj in specs], dtype=float).reshape(-1, 3)
         self.bodies = self._keep
 
     @property
@@ -143,10 +144,16 @@ class SceneWorld:
         return [_probe_first(p) for p in data.found]
 
     def probe_hits(
-        self, body: fcl.CollisionObject, centre: np.ndarray, radius: float, threshold: float
+        self,
+        body: fcl.CollisionObject,
+        centre: np.ndarray,
+        radius: float,
+        threshold: float,
+        geometry: fcl.CollisionGeometry | None = None,
     ) -> list[str]:
         """Ids of the objects closer than ``threshold`` [m] to ``body`` (placed), whose points
-        all lie within ``radius`` [m] of ``centre`` [m] (3,) in the world frame.
+        all lie within ``radius`` [m] of ``centre`` [m] (3,) in the world frame. ``geometry``:
+        the body's geometry, kept with its pose by the recorders (:mod:`.footprint`).
 
         The same set as the ids of :meth:`clearance` (#28: the broad-phase manager called a
         Python callback per object near the probe's AABB): the lower bound of
@@ -167,22 +174,42 @@ class SceneWorld:
             threshold,
             False,
         )
-        if self.recorders:
-            query = SceneQuery(
-                centres, radii, threshold, False, rows, tuple(self.specs[o] for o in objects)
-            )
-            for log in self.recorders:
-                log.append(query)
         hits = []
+        found = []
         for o in objects:
             result = fcl.DistanceResult()
             if fcl.distance(self._keep[o], body, _REQUEST, result) < threshold:
                 hits.append(self.ids[o])
+                found.append(self.specs[o])
+        if self.recorders:
+            probe = None if geometry is None else (geometry, body.getTransform())
+            query = SceneQuery(
+                centres,
+                radii,
+                threshold,
+                False,
+                rows,
+                tuple(self.specs[o] for o in objects),
+                hits=tuple(found),
+                probe=probe,
+            )
+            for log in self.recorders:
+                log.append(query)
         return hits
 
 
-def _half_extents(obj: ObjectSpec) -> tuple[float, float, float]:
-    """Half sizes [m] of a box in the object's frame containing it (cylinder: r, r, h/2)."""
+def probe_distance(obj: ObjectSpec, geometry: fcl.CollisionGeometry, pose: fcl.Transform) -> float:
+    """``fcl.distance`` [m] of ``obj`` (as a :class:`SceneWorld` holds it) to a probe of
+    ``geometry`` at ``pose``: the call :meth:`SceneWorld.probe_hits` makes.
+    """
+    body = fcl.CollisionObject(object_geometry(obj), object_transform(obj))
+    return fcl.distance(body, fcl.CollisionObject(geometry, pose), _REQUEST, fcl.DistanceResult())
+
+
+def cull_half_extents(obj: ObjectSpec) -> tuple[float, float, float]:
+    """Half sizes [m] of the box in the object's frame containing it that the scene queries'
+    culls bound distances with (cylinder: r, r, h/2; :func:`.kernels.scene_candidates`).
+    """
     if obj.shape == 'cylinder':
         return (obj.radius, obj.radius, obj.height / 2)
     sx, sy, sz = obj.size
@@ -259,7 +286,7 @@ class RobotBodies:
         self._placements = np.tile(np.eye(4), (len(self.bodies) + 1, 1, 1))
         # Active logs of scene queries (:class:`SceneQuery`), appended to by every scene query
         # (:meth:`scene_proximities`, :meth:`scene_clear`): RobustStpik's replay memo.
-        self.recorders: list[list[SceneQuery]] = []
+        self.recorders: list[QueryRecorder] = []  # logs of the scene queries (memos, footprints)
         self._build_managers()
 
     def _build_managers(self) -> None:
@@ -422,36 +449,47 @@ class RobotBodies:
             inclusive,
         )
 
-    def _candidates(
-        self, scene: SceneWorld, threshold: float, inclusive: bool
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`_scene_candidates`, logged to every active recorder (:class:`SceneQuery`)."""
-        rows, objects = self._scene_candidates(scene, threshold, inclusive)
-        if self.recorders:
-            query = SceneQuery(
-                self._centres[self._scene_index],
-                self._scene_radii,
-                threshold,
-                inclusive,
-                rows,
-                tuple(scene.specs[o] for o in objects),
-            )
-            for log in self.recorders:
-                log.append(query)
-        return rows, objects
+    def _record(
+        self,
+        scene: SceneWorld,
+        threshold: float,
+        inclusive: bool,
+        culled: tuple[np.ndarray, np.ndarray],
+        hits: list[int],
+    ) -> None:
+        """Log one query to every active recorder (:class:`SceneQuery`): its cull ``culled``
+        (:meth:`_scene_candidates`) and the indices of the objects it found within reach.
+        """
+        rows, objects = culled
+        specs = scene.specs
+        query = SceneQuery(
+            self._centres[self._scene_index],
+            self._scene_radii,
+            threshold,
+            inclusive,
+            rows,
+            tuple([specs[o] for o in objects.tolist()]),
+            hits=tuple({specs[o]: None for o in hits}),
+        )
+        for log in self.recorders:
+            log.append(query)
 
     def scene_clear(self, scene: SceneWorld, threshold: float) -> bool:
         """True when every (body, scene object) pair is more than ``threshold`` [m] apart.
 
         Same bound and ``fcl.distance`` as :meth:`scene_proximities`, first hit stops it.
         """
-        rows, objects = self._candidates(scene, threshold, True)
+        culled = self._scene_candidates(scene, threshold, True)
         index = self._scene_index
-        for body, obj in zip(rows, objects, strict=True):
+        for body, obj in zip(*culled, strict=True):
             result = self._fresh_result()
             robot = self._body(int(index[body]))
             if fcl.distance(robot, scene.bodies[obj], _REQUEST, result) <= threshold:
+                if self.recorders:
+                    self._record(scene, threshold, True, culled, [int(obj)])
                 return False
+        if self.recorders:
+            self._record(scene, threshold, True, culled, [])
         return True
 
     def scene_proximities(self, scene: SceneWorld, threshold: float) -> list[Proximity]:
@@ -462,16 +500,20 @@ class RobotBodies:
         Only pairs whose bound is below ``threshold`` reach ``fcl.distance``, so the result
         is the same set as a query of every pair.
         """
-        rows, objects = self._candidates(scene, threshold, False)
+        culled = self._scene_candidates(scene, threshold, False)
         index = self._scene_index
         found: list[Proximity] = []
-        for body, obj in zip(rows, objects, strict=True):
+        hits: list[int] = []
+        for body, obj in zip(*culled, strict=True):
             result = self._fresh_result()
             robot = self._body(int(index[body]))
             distance = fcl.distance(robot, scene.bodies[obj], _REQUEST, result)
             if distance < threshold:
                 pa, pb = result.nearest_points
                 found.append(Proximity(self._scene_names[body], scene.ids[obj], distance, pa, pb))
+                hits.append(int(obj))
+        if self.recorders:
+            self._record(scene, threshold, False, culled, hits)
         return found
 
 
@@ -488,6 +530,9 @@ class SceneQuery:
         threshold: the query's distance threshold [m]; inclusive: ``<=`` instead of ``<``.
         rows: rows into the scene-checked bodies of the pairs let through (n,).
         objects: the object of each of those pairs (n,).
+        hits: the objects the query found within ``threshold`` (its result depends on them
+            only; a ``scene_clear`` stops at its first).
+        probe: a probe query's geometry and pose (:meth:`SceneWorld.probe_hits`), if given.
     """
 
     centres: np.ndarray
@@ -496,6 +541,35 @@ class SceneQuery:
     inclusive: bool
     rows: np.ndarray
     objects: tuple[ObjectSpec, ...]
+    hits: tuple[ObjectSpec, ...] = ()
+    probe: tuple[fcl.CollisionGeometry, fcl.Transform] | None = None
+
+
+class QueryRecorder(Protocol):
+    """What the scene queries log to: a :class:`QueryList` (the memos) or a
+    :class:`~.footprint.Footprint` (an answer's reuse after a scene change).
+    """
+
+    def append(self, query: SceneQuery, /) -> None:
+        """Record one query."""
+
+    def extend(self, queries: Iterable[SceneQuery], /) -> None:
+        """Record the queries of a result reused from a memo."""
+
+    def lose(self, why: str, /) -> None:
+        """Note that a part of the computation made queries that were not recorded."""
+
+
+class QueryList(list[SceneQuery]):
+    """The scene queries of one computation (a memo's log); ``complete`` is False once a part
+    of it was reused from a memo that kept no queries (then the log proves nothing elsewhere).
+    """
+
+    complete = True
+
+    def lose(self, why: str, /) -> None:
+        """Note that queries were not recorded (``why`` is for the footprint's log only)."""
+        self.complete = False
 
 
 class QueryLog:

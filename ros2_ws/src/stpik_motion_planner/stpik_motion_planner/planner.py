@@ -15,10 +15,12 @@ is answered ``VERIFICATION_FAILED`` / ``CARRIED_COLLISION``, never returned.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -42,7 +44,7 @@ from stpik_motion_planner.cartesian_path import (
     approach_yaws,
     interpolate,
 )
-from stpik_motion_planner.collision import QueryLog, SceneWorld
+from stpik_motion_planner.collision import QueryList, QueryLog, SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import (
     IkNotConverged,
@@ -58,6 +60,7 @@ from stpik_motion_planner.exceptions import (
     VerificationFailed,
     copy_error,
 )
+from stpik_motion_planner.footprint import Footprint, PlannedAnswer
 from stpik_motion_planner.grasps import (
     Approach,
     candidate_approaches,
@@ -116,6 +119,10 @@ class MotionPlanner:
         # Proves the executor's stop distance on every pair, the whole carried object included.
         self.verifier = TrajectoryVerifier(self.robot, clearance_m=STOP_CLEARANCE_M)
         self.cache = FeasibilityCache()
+        # The infeasible answers' plans before their blockers, with the part of the workspace
+        # each looked at (:mod:`.footprint`), by cache key: .answer_reuse keeps them across a
+        # scene change that stays out of it.
+        self.footprints: dict[tuple[frozenset[str], str], PlannedAnswer] = {}
         # Sampled Cartesian paths by approach, with their probes' logs (:meth:`_sample`).
         self._sampled: dict[tuple, list] = {}
         self.blockers = BlockerFinder(self)
@@ -133,13 +140,19 @@ class MotionPlanner:
             return answer
         deadline = time.perf_counter() + self.config.time_limit_s  # the whole answer's budget
         cpu_start = time.thread_time()
-        result = self.plan(object_id, relocated)
+        footprint = Footprint()
+        planned = self.plan(object_id, relocated, footprint=footprint)
         # Blockers cut short by the deadline stay in the cached answer (its feasibility is
         # final); the sweeps go on at the next uncached request about the same object.
-        result = self.blockers.annotate(result, object_id, relocated, deadline)
+        result = self.blockers.annotate(planned, object_id, relocated, deadline)
         result = dataclasses.replace(result, cpu_time=time.thread_time() - cpu_start)
         if result.reason != Reason.TIMEOUT:  # a timeout may pass on a quieter machine
             self.cache.put(object_id, relocated, result)
+            if not result.feasible:  # kept for a scene change (.answer_reuse)
+                if planned.timings.get('verify', 0.0) > 0.0:
+                    footprint.lose('the verifier ran: its checks are not culled queries')
+                key = (frozenset(relocated), object_id)
+                self.footprints[key] = PlannedAnswer(planned, footprint.region())
         return result
 
     def precheck(self, object_id: str, relocated: list[str]) -> PlanResult | None:
@@ -204,6 +217,7 @@ class MotionPlanner:
         slot_index: int | None = None,
         deadline: float | None = None,
         approaches: Sequence[Approach] | None = None,
+        footprint: Footprint | None = None,
     ) -> PlanResult:
         """Plan without the cache (the request must be valid).
 
@@ -218,6 +232,7 @@ class MotionPlanner:
             deadline: ``time.perf_counter()`` value to stop at [s], if earlier than the time
                 limit (the blocker sweeps share their request's budget).
             approaches: the candidate grasps (family and yaw), instead of ``yaws``.
+            footprint: records every scene query of the plan (:mod:`.footprint`), if given.
         """
         c = self.config
         start = time.perf_counter()
@@ -234,13 +249,36 @@ class MotionPlanner:
             self.hand = HandModel(self.robot, c.pregrasp_standoff_m)  # config changed since
         sampler = CartesianSampler(scene, c, self.hand)
         centre = np.asarray(obj.position, dtype=float)
+        if approaches is None and yaws is not None:
+            approaches = [Approach('side', float(y)) for y in yaws]
+        elif approaches is None:
+            side = approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad)
+            approaches = candidate_approaches(centre, c.grasp_families, side)
+        recording = (self.stpik.bodies, scene, sampler.movable) if footprint is not None else ()
+        with _recording(footprint, recording):
+            return self._plan_approaches(
+                obj, index, approaches, sampler, standing, start, deadline, timings
+            )
+
+    def _plan_approaches(
+        self,
+        obj: ObjectSpec,
+        index: int,
+        approaches: Sequence[Approach],
+        sampler: CartesianSampler,
+        standing: list[ObjectSpec],
+        start: float,
+        deadline: float,
+        timings: dict[str, float],
+    ) -> PlanResult:
+        """:meth:`plan` from its candidate ``approaches`` on: ``obj`` to drop slot ``index``
+        among ``standing`` (``sampler.scene`` holds them), started at ``start`` [s].
+        """
+        c = self.config
+        scene = sampler.scene
+        object_id = obj.id
         failures: list[MotionPlannerError] = []
         try:
-            if approaches is None and yaws is not None:
-                approaches = [Approach('side', float(y)) for y in yaws]
-            elif approaches is None:
-                side = approach_yaws(centre, c.approach_directions, c.approach_yaw_step_rad)
-                approaches = candidate_approaches(centre, c.grasp_families, side)
             # Pass 1: every approach with the plain STPIK (fast); pass 2, only when all failed:
             # the sampled approaches again with the fallbacks of .robust_stpik (IK restarts,
             # RRTConnect transits). Same feasibility as one pass with fallbacks, far faster.
@@ -359,8 +397,11 @@ class MotionPlanner:
                 log.replays_in(world) for log, world in zip(seen_logs, worlds, strict=True)
             ):
                 failures.extend(copy_error(err) for err in seen_found)
+                for log, world in zip(seen_logs, worlds, strict=True):
+                    for recorder in world.recorders:  # an enclosing answer's footprint
+                        recorder.extend(log.queries)
                 return seen_path
-        logs: tuple[list, list] = ([], [])
+        logs = (QueryList(), QueryList())
         for log, world in zip(logs, worlds, strict=True):
             world.recorders.append(log)
         found: list = []
@@ -770,3 +811,15 @@ def _most_informative(failures: list[MotionPlannerError], object_id: str) -> Mot
     if failures:
         return failures[0]
     return NoCartesianPath(object_id, 'no approach direction tried')
+
+
+@contextlib.contextmanager
+def _recording(footprint: Footprint | None, holders: Sequence[Any]) -> Iterator[None]:
+    """``footprint`` on the ``recorders`` of ``holders`` (robot bodies, scene worlds) inside."""
+    for holder in holders:
+        holder.recorders.append(footprint)
+    try:
+        yield
+    finally:
+        for holder in holders:
+            holder.recorders.remove(footprint)

@@ -37,7 +37,7 @@ from typing import cast
 import numpy as np
 import pinocchio as pin
 
-from stpik_motion_planner.collision import QueryLog, SceneQuery, SceneWorld
+from stpik_motion_planner.collision import QueryList, QueryLog, SceneWorld
 from stpik_motion_planner.exceptions import MotionPlannerError, PlanningTimeout, copy_error
 from stpik_motion_planner.rrt_connect import RrtConnect, question_seed
 from stpik_motion_planner.stpik import Stpik, joint_segment
@@ -124,9 +124,12 @@ class RobustStpik(Stpik):
                 self._memo.move_to_end(key)
                 self.memo_hits += 1
                 for recorder in self.bodies.recorders:  # an enclosing computation's queries
-                    recorder.extend(outcome.queries.queries if outcome.queries is not None else ())
+                    if outcome.queries is not None:
+                        recorder.extend(outcome.queries.queries)
+                    else:  # its queries were not kept: the enclosing log proves nothing else
+                        recorder.lose('an STPIK result reused from the memo without its queries')
                 return outcome.again()
-        log: list[SceneQuery] = []
+        log = QueryList()
         self.bodies.recorders.append(log)
         try:
             value = compute()
@@ -142,12 +145,14 @@ class RobustStpik(Stpik):
         return value
 
     def _keep(
-        self, key: tuple, scene: tuple, log: list[SceneQuery], ok: bool, value, args: tuple
+        self, key: tuple, scene: tuple, log: QueryList, ok: bool, value, args: tuple
     ) -> None:
         """Remember an outcome under ``key``, within :data:`MEMO_QUERIES` (oldest dropped);
-        one of more than :data:`MEMO_ENTRY_QUERIES` queries is reused in its own scene only.
+        one of more than :data:`MEMO_ENTRY_QUERIES` queries, or whose log missed some (a nested
+        result reused without its queries), is reused in its own scene only.
         """
-        queries = QueryLog(log) if len(log) <= MEMO_ENTRY_QUERIES else None
+        keep = log.complete and len(log) <= MEMO_ENTRY_QUERIES
+        queries = QueryLog(log) if keep else None
         outcome = _Outcome(scene, queries, ok, value, args)
         entries = self._memo.setdefault(key, [])
         self._memo.move_to_end(key)

@@ -47,17 +47,20 @@ def test_a_kept_feasible_answer_is_clear_of_the_change_and_untouched(clear, chan
     assert bool(why) == expected
 
 
-def test_infeasible_answers_kept_only_when_independent_of_movable_objects() -> None:
+def test_infeasible_answers_kept_by_size_or_when_their_plan_replays() -> None:
     key = (frozenset(), 'A')
     never = lambda: pytest.fail('an infeasible answer has no motion to verify')  # noqa: E731
+    replays, differs = (lambda: True), (lambda: False)
     blocked = PlanResult(False, Reason.SCENE_COLLISION, 'no', blocking_ids=('B',))
-    assert kept_because(key, blocked, {'B'}, never, 5) == ''
+    assert kept_because(key, blocked, {'B'}, never, 5, differs) == ''
+    assert 'same scene queries' in kept_because(key, blocked, {'B'}, never, 5, replays)
+    assert kept_because(key, blocked, {'B'}, never, 0, replays) == ''  # its drop slot changed
+    # The statics-only sweeps alone do not keep it (they try every other approach only).
     immovable = PlanResult(False, Reason.NO_CARTESIAN_PATH, 'no', blocked_by_immovable=True)
-    assert 'statics-only' in kept_because(key, immovable, {'B'}, never, 5)
-    assert kept_because(key, immovable, {'B'}, never, 0) == ''  # slot 0 changed
+    assert kept_because(key, immovable, {'B'}, never, 5, differs) == ''
     big = PlanResult(False, Reason.OBJECT_TOO_BIG, 'no')
     assert kept_because(key, big, {'B'}, never, 5)
-    assert kept_because(key, big, {'A'}, never, 5) == ''
+    assert kept_because(key, big, {'A'}, never, 5, replays) == ''
 
 
 @pytest.fixture(scope='module')
@@ -119,3 +122,42 @@ def test_reuse_needs_the_same_scene(make_cylinder, make_scenario) -> None:
     entries = {(frozenset(), 'T'): FEASIBLE}
     kept, why = reuse_answers(old, new, entries, lambda k, r: True)
     assert kept == {} and 'another scene' in why
+
+
+def test_an_infeasible_answer_is_kept_only_where_its_plan_goes_as_it_went(
+    make_cylinder, make_scenario, robot
+) -> None:
+    """T, behind O1, is infeasible; its plan's queries found O1, O2 and O3 but never O9. O9
+    moved farther: T's answers are kept and equal, message and blockers included, what a fresh
+    planner answers in the new scene. O9 put beside O1, or O3 moved: they are planned again."""
+    scene = make_scenario(
+        make_cylinder('T', 0.65, 0.0, 'target'),
+        make_cylinder('O1', 0.55, 0.0),
+        make_cylinder('O2', 0.45, -0.35),
+        make_cylinder('O3', 0.5, 0.3),
+        make_cylinder('O9', 0.2, 0.55),
+    )
+    old = MotionPlanner(scene, PlannerConfig(time_limit_s=60.0), model=robot)
+    for object_id, relocated in [('T', []), ('T', ['O2']), ('O1', [])]:
+        old.check(object_id, relocated)
+    assert not old.cache.get('T', []).feasible and old.cache.get('T', []).blocking_ids == ('O1',)
+    met = {o.id for o in old.footprints[(frozenset(), 'T')].region.met}
+    assert 'O9' not in met and 'O1' in met
+
+    farther = _moved(scene, 'O9', 0.15, 0.6)
+    new = MotionPlanner(farther, old.config, model=robot)
+    assert carry_over(old, new) == 'kept 3 of 3 cached answers (changed: O9)'
+    fresh = MotionPlanner(farther, old.config, model=robot)
+    for relocated in ([], ['O2']):
+        kept, again = new.check('T', relocated), fresh.check('T', relocated)
+        assert kept.from_cache and not again.from_cache
+        assert (kept.reason, kept.message, kept.blocking_ids, kept.approach_blockers) == (
+            again.reason,
+            again.message,
+            again.blocking_ids,
+            again.approach_blockers,
+        )
+    for changed in (_moved(scene, 'O9', 0.55, 0.08), _moved(scene, 'O3', 0.5, 0.35)):
+        planner = MotionPlanner(changed, old.config, model=robot)
+        carry_over(old, planner)
+        assert planner.cache.get('T', []) is None and planner.cache.get('T', ['O2']) is None

@@ -171,6 +171,10 @@ def targets_met(outcomes: list, rows: list[dict]) -> dict:
         'recovery_met': recovery <= TARGETS['recovery_s_median_max'],
         'reused_share_one_object': reused,
         'reused_met': reused is not None and reused >= TARGETS['reused_share_one_object_min'],
+        'kept_infeasible_answers': sum(o.kept_infeasible for o in outcomes),
+        'kept_infeasible_answered_otherwise_afresh': sum(
+            o.kept_infeasible_differ for o in outcomes
+        ),
         'unsolvable_after_event': sum(o.solvable is False for o in outcomes),
         'undecided_after_event': sum(o.solvable is None for o in outcomes),
         'solvable_decided_by': dict(Counter(o.decided_by for o in outcomes)),

@@ -69,6 +69,8 @@ class RunOutcome:
     recovery_s: float
     violations: int
     sequence: tuple[str, ...]  # the whole executed retrieval (prefix, then the re-plan's)
+    kept_infeasible: int = 0  # kept infeasible answers, each planned again afresh [-]
+    kept_infeasible_differ: int = 0  # of them, answered otherwise by a fresh planner [-]
 
     @property
     def reused_share(self) -> float:
@@ -315,6 +317,14 @@ def run_event(
         for (relocated, object_id), answer in kept
         if answer.feasible
     )
+    # Each kept infeasible answer against a fresh planner's in the new scene (#32 item 4: the
+    # same answer, message and blockers included).
+    infeasible = [(key, answer) for key, answer in kept if not answer.feasible]
+    fresh = make_planner(scene) if infeasible else planner
+    differ = sum(
+        not same_answer(answer, fresh.check(object_id, list(relocated)))
+        for (relocated, object_id), answer in infeasible
+    )
     executed = [*prefix, *result.sequence]
     for i in range(len(prefix), len(executed) if retrieved else 0):
         answer = planner.check(executed[i], executed[:i])
@@ -337,7 +347,15 @@ def run_event(
         recovery_s=round(recovery_s, 3),
         violations=violations,
         sequence=tuple(executed) if retrieved else (),
+        kept_infeasible=len(infeasible),
+        kept_infeasible_differ=differ,
     )
+
+
+def same_answer(kept: Any, fresh: Any) -> bool:
+    """Whether two answers agree: feasibility, reason, message and blockers."""
+    fields = ('feasible', 'reason', 'message', 'blocking_ids', 'blocked_by_immovable')
+    return all(getattr(kept, f) == getattr(fresh, f) for f in fields)
 
 
 def summary_rows(outcomes: Sequence[RunOutcome]) -> list[dict[str, Any]]:
