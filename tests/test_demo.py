@@ -52,6 +52,29 @@ def test_demo_rejects_bad_command_line() -> None:
     assert 'Traceback' not in result.stderr
 
 
+@pytest.mark.parametrize(
+    ('events', 'message'),
+    [
+        ('[{kind: move, object: O9, xy: [0.7, 0.0], at_s: 1}]', "unknown object 'O9'"),
+        ('[{kind: move, object: O5, xy: [0.8, 0.0], at_s: 1}]', "xy: 'O5' overlaps 'T'"),
+        ('[{kind: grasp_failure, object: T, attempt: 0}]', 'scene_events[0].attempt'),
+        ('{kind: move}', 'a list of events expected'),
+    ],
+)
+def test_demo_refuses_bad_scene_events_before_starting_a_node(events: str, message: str) -> None:
+    """A typo in ``--scene-events`` is a command-line error naming the field (exit 2), found
+    with the simulator's own parser before any node starts."""
+    result = subprocess.run(
+        [sys.executable, str(DEMO), '--scenario', 's1', '--scene-events', events],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert message in result.stderr and '--scene-events: ' in result.stderr, result.stderr
+    assert 'Traceback' not in result.stderr and 'starting the node graph' not in result.stdout
+
+
 def test_demo_trains_and_stops_cleanly(ros_domain: int, tmp_path: Path) -> None:
     result = subprocess.run(
         [

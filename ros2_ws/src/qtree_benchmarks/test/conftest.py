@@ -1,27 +1,12 @@
-"""Shared fixtures of the benchmark unit tests (no ROS import)."""
+"""Shared fixtures of the benchmark unit tests (no ROS import): those of
+:mod:`stpik_motion_planner.testing` (a fixture imported into a conftest is registered there).
+"""
 
 from __future__ import annotations
 
-import pytest
-from jaco2_description.model import Jaco2Model
-from qtree_scene.scene import Scenario
-from qtree_scene.testing import boxed_scenario, free_scenario
-from stpik_motion_planner.testing import unhurried_planner  # noqa: F401 (autouse fixture)
-
-
-@pytest.fixture(scope='session')
-def robot() -> Jaco2Model:
-    """One shared robot model."""
-    return Jaco2Model()
-
-
-@pytest.fixture(scope='session')
-def free_scene() -> Scenario:
-    """The target alone, 0.65 m in front of the robot."""
-    return free_scenario()
-
-
-@pytest.fixture(scope='session')
-def boxed_scene() -> Scenario:
-    """The target boxed in on every side by six obstacles 8 cm away."""
-    return boxed_scenario()
+from stpik_motion_planner.testing import (  # noqa: F401 (fixtures)
+    boxed_scene,
+    free_scene,
+    robot,
+    unhurried_planner,
+)

@@ -7,7 +7,7 @@ planner's cache every answer of the old one that cannot depend on the change, by
 (:func:`kept_because`; anything else is dropped and planned again when asked):
 
 Scene-level conditions (else nothing is kept): same scene name, drop zone and home; no changed
-object is static or the target.
+object is static (the target is an object like the others for the answers of the others).
 
 Per answer ``(R, o)``: neither ``o`` nor any object of ``R`` changed; the drop slots 0 … |R|
 (:func:`qtree_scene.placement.drop_slots`, which depend on every clutter object) are the same
@@ -77,7 +77,7 @@ def scene_blocks_reuse(old: Scenario, new: Scenario, changed: list[ObjectSpec]) 
     if old.drop_zone_center != new.drop_zone_center or tuple(old.home) != tuple(new.home):
         return 'drop zone or home changed'
     for obj in changed:
-        if obj.role in ('static', 'target'):
+        if obj.role == 'static':  # the statics-only blocker sweeps and the immovable reasons
             return f'{obj.role} {obj.id!r} changed'
     return ''
 

@@ -1,12 +1,18 @@
-"""Shared fixtures of the motion-planner unit tests (no ROS import)."""
+"""Shared fixtures of the motion-planner unit tests (no ROS import); ``robot``, ``free_scene``,
+``boxed_scene`` and the autouse ``unhurried_planner`` live in :mod:`stpik_motion_planner.testing`
+(shared with ``qtree_benchmarks/test``).
+"""
 
 from __future__ import annotations
 
 import pytest
-from jaco2_description.model import Jaco2Model
-from qtree_scene.scene import Scenario
-from qtree_scene.testing import boxed_scenario, cylinder, free_scenario, scenario
-from stpik_motion_planner.testing import unhurried_planner  # noqa: F401 (autouse fixture)
+from qtree_scene.testing import cylinder, scenario
+from stpik_motion_planner.testing import (  # noqa: F401 (fixtures)
+    boxed_scene,
+    free_scene,
+    robot,
+    unhurried_planner,
+)
 
 
 @pytest.fixture(scope='session')
@@ -19,21 +25,3 @@ def make_cylinder():
 def make_scenario():
     """Factory fixture: :func:`scenario`."""
     return scenario
-
-
-@pytest.fixture(scope='session')
-def robot() -> Jaco2Model:
-    """One shared robot model (building it takes a few ms)."""
-    return Jaco2Model()
-
-
-@pytest.fixture(scope='session')
-def free_scene() -> Scenario:
-    """The target alone, 0.65 m in front of the robot."""
-    return free_scenario()
-
-
-@pytest.fixture(scope='session')
-def boxed_scene() -> Scenario:
-    """The target boxed in on every side by six obstacles 8 cm away."""
-    return boxed_scenario()

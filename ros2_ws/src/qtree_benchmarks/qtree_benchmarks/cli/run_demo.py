@@ -74,12 +74,41 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument(
         '--timeout', type=float, default=900.0, help='give up after this many seconds'
     )
+    parser.add_argument(
+        '--scene-events',
+        default='',
+        metavar='YAML',
+        help='test events for the simulator (#32), e.g. "[{kind: move, object: O5, xy: [0.7, '
+        '0.0], hand_within_m: 0.2}]" (format in jaco2_sim/scene_events.py): watch a recovery',
+    )
     args = parser.parse_args(argv)
     if args.max_episodes <= 0:
         parser.error('--max-episodes must be > 0')
     if args.timeout <= 0:
         parser.error('--timeout must be > 0')
+    if args.scene_events.strip():
+        why = scene_events_problem(args.scenario, args.scene_events)
+        if why:
+            parser.error(f'--scene-events: {why}')
     return args
+
+
+def scene_events_problem(scenario: str, text: str) -> str:
+    """Why the simulator would refuse the scene events ``text`` on ``scenario`` ('' if not).
+
+    Checked before any node starts, with the simulator's own parser, so that a typo is a
+    command-line error and not a node log line.
+    """
+    from jaco2_sim.exceptions import SceneEventError
+    from jaco2_sim.scene_events import parse_events
+    from qtree_scene.exceptions import ScenarioError
+    from qtree_scene.scenario import load_scenario
+
+    try:
+        parse_events(text, load_scenario(scenario))
+    except (SceneEventError, ScenarioError) as err:
+        return str(err)
+    return ''
 
 
 def run_files(output_dir: Path, scenario: str) -> RunFiles:
@@ -113,8 +142,12 @@ def start_graph(args: argparse.Namespace, files: RunFiles) -> list[NodeProcess]:
         'max_episodes': args.max_episodes,
         'execute': not args.no_execute,
         'execution_mode': args.execution_mode,
+        'scene_events': args.scene_events,
     }
     rerun_mode = 'save' if args.headless else 'spawn'
+    sim_parameters: dict[str, Any] = {'scenario': args.scenario}
+    if args.scene_events.strip():
+        sim_parameters['scene_events'] = args.scene_events
     specs: list[tuple[str, str, dict[str, Any]]] = [
         (
             'qtree_recorder',
@@ -128,7 +161,7 @@ def start_graph(args: argparse.Namespace, files: RunFiles) -> list[NodeProcess]:
                 'rrd_path': str(files.rrd),
             },
         ),
-        ('jaco2_sim', 'sim_node', {'scenario': args.scenario}),
+        ('jaco2_sim', 'sim_node', sim_parameters),
         (
             'stpik_motion_planner',
             'motion_planner_node',
@@ -161,6 +194,10 @@ def report(result: Any) -> None:
         f'{result.first_learned_level_episode}   extraction: {result.extraction}   '
         f'converged: {result.converged}   executed: {result.executed}'
     )
+    for number, cause in enumerate(getattr(result, 'replan_causes', ()), start=1):
+        reused = list(getattr(result, 'reused_answers', ()))
+        kept = f' ({reused[number - 1]} answers reused)' if number <= len(reused) else ''
+        print(f're-plan {number}: {cause}{kept}')
 
 
 def print_files(files: RunFiles) -> None:
