@@ -62,6 +62,25 @@ def test_script_rejects_bad_flags() -> None:
             bench_scale.parse_args(argv)
 
 
+def test_grasp_families_flag_says_what_the_planner_refuses(capsys) -> None:
+    """#27: one home for the check (grasps.check_families), the flag gives its words."""
+    from qtree_benchmarks.cli import bench_scale
+
+    for text, words in (
+        ('side,side', 'repeated'),
+        ('from_below', "unknown grasp family 'from_below'"),
+    ):
+        with pytest.raises(SystemExit) as exit_info:
+            bench_scale.parse_args(['--grasp-families', text])
+        assert exit_info.value.code == 2
+        err = capsys.readouterr().err
+        assert f"--grasp-families: '{text}': " in err and words in err
+    assert bench_scale.parse_args(['--grasp-families', 'top, side']).grasp_families == (
+        'top',
+        'side',
+    )
+
+
 def test_merge_writes_one_report_from_runs_in_parts(tmp_path) -> None:
     import json
 

@@ -307,6 +307,7 @@ class Execution(TrajectoryExecution):
                         f'{silent:.1f} s, joint_state_timeout_s={silence_s:.1f})'
                     )
                 return
+            elapsed_s = self.state_time - self._last_state_time  # inf on the first tick
             self._last_state_time = self.state_time
             try:
                 if self._scene_dirty:
@@ -317,7 +318,7 @@ class Execution(TrajectoryExecution):
                         return
                     controller.set_scene(self._live_scene())
                     self._scene_dirty = False
-                tick = controller.step(np.array(self.q))
+                tick = controller.step(np.array(self.q), elapsed_s)
             except ExecutionStopped as err:
                 self._stop_locked(str(err))
                 return

@@ -316,28 +316,46 @@ class RobotBodies:
         self._scene_names = [names[i] for i in self._scene_index]
         self._scene_radii = np.ascontiguousarray(self._all_radii[self._scene_index])
 
-    def attach(self, obj: ObjectSpec, transform_obj_to_ee: pin.SE3, settle_m: float = 0.0) -> None:
+    def attach(
+        self,
+        obj: ObjectSpec,
+        transform_obj_to_ee: pin.SE3,
+        settle_m: float = 0.0,
+        settle_top_m: float | None = None,
+    ) -> None:
         """Carry ``obj`` rigidly at ``transform_obj_to_ee`` (its pose in the EE frame).
 
         Args:
-            obj: the grasped object.
+            obj: the grasped object (upright: its z axis is the one shortened).
             transform_obj_to_ee: pose of the object in the EE frame.
-            settle_m: the object's collision body is this much shorter at each end [m], so
+            settle_m: the object's collision body is this much shorter at its bottom [m], so
                 that setting it down on the table is not a collision (sideways margins stay).
+            settle_top_m: this much shorter at its top [m]; None: ``settle_m`` (the planner's
+                symmetric body). The closed loop passes 0: the top end is checked exactly (#29).
         """
+        top_m = settle_m if settle_top_m is None else settle_top_m
+        full = obj.height if obj.shape == 'cylinder' else obj.size[2]
+        length = max(full - settle_m - top_m, 1e-3)
         if obj.shape == 'cylinder':
-            geometry = fcl.Cylinder(obj.radius, max(obj.height - 2 * settle_m, 1e-3))
+            geometry = fcl.Cylinder(obj.radius, length)
         else:
-            sx, sy, sz = obj.size
-            geometry = fcl.Box(sx, sy, max(sz - 2 * settle_m, 1e-3))
+            sx, sy, _ = obj.size
+            geometry = fcl.Box(sx, sy, length)
         self.names[id(geometry)] = 'attached'
         self._attached_geometry = geometry
-        height = obj.height if obj.shape == 'cylinder' else obj.size[2]
         across = obj.radius if obj.shape == 'cylinder' else 0.5 * math.hypot(*obj.size[:2])
-        self.attached_radius = math.hypot(across, height / 2)
+        self.attached_radius = math.hypot(across, full / 2)
         self.attached = fcl.CollisionObject(geometry, fcl.Transform())
-        self._attached_offset = np.array(transform_obj_to_ee.homogeneous)
-        self.attach_key = (obj, transform_obj_to_ee.homogeneous.tobytes(), float(settle_m))
+        # The body's centre: half the difference of the two cuts above the object's centre.
+        shift = np.eye(4)
+        shift[2, 3] = 0.5 * (settle_m - top_m)
+        self._attached_offset = np.array(transform_obj_to_ee.homogeneous) @ shift
+        self.attach_key = (
+            obj,
+            transform_obj_to_ee.homogeneous.tobytes(),
+            float(settle_m),
+            float(top_m),
+        )
         self._build_managers()
 
     def detach(self) -> None:

@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 from qtree_scene.generator import LAYOUTS
-from stpik_motion_planner.grasps import GRASP_FAMILIES
+from stpik_motion_planner.grasps import GRASP_FAMILIES, check_families
 
 from qtree_benchmarks.cli.benchmark import RESULTS
 from qtree_benchmarks.task.runner import run_all
@@ -63,9 +63,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     parser.add_argument(
         '--grasp-families',
-        type=_names(GRASP_FAMILIES, '--grasp-families'),
+        type=_grasp_families,
         default=('side',),
-        help="comma-separated grasp families of the planner (side: the paper's; side,top)",
+        help=f'comma-separated grasp families of the planner ({", ".join(GRASP_FAMILIES)}; '
+        "side: the paper's)",
     )
     parser.add_argument('--workers', type=int, default=1, help='processes (default: one core)')
     parser.add_argument('--ray', metavar='ADDRESS', help="Ray address, or 'local'")
@@ -107,6 +108,14 @@ def _names(known: tuple[str, ...], flag: str):
         return names
 
     return parse
+
+
+def _grasp_families(text: str) -> tuple[str, ...]:
+    """Argparse type of ``--grasp-families``: the planner's own check (:func:`check_families`)."""
+    try:
+        return check_families([n.strip() for n in text.split(',') if n.strip()])
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f'--grasp-families: {text!r}: {err}') from None
 
 
 def merged(paths: list[Path]) -> tuple[list[dict], dict]:

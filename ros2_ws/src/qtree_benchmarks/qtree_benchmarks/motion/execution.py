@@ -63,6 +63,7 @@ class Execution:
         step_s: wall time of each controller step [s] (empty in open loop).
         step_cpu_s: thread CPU time of each controller step [s] (empty in open loop).
         min_clearance_m: smallest robot (and carried object) to scene distance [m].
+        min_clearance_pair: the two bodies of that distance (``'attached / O3'``).
         ee_ref: reference EE positions per tick [m], shape (T, 3).
         ee_actual: actual EE positions per tick [m], shape (T, 3).
     """
@@ -75,6 +76,7 @@ class Execution:
     step_s: list[float] = field(default_factory=list)
     step_cpu_s: list[float] = field(default_factory=list)
     min_clearance_m: float = math.inf
+    min_clearance_pair: str = ''
     ee_ref: list[np.ndarray] = field(default_factory=list)
     ee_actual: list[np.ndarray] = field(default_factory=list)
 
@@ -165,9 +167,12 @@ class Executor:
         if self._clearance >= FAR_M and self.ticks % SPARSE_TICKS:
             return
         k = self.monitor.kinematics(q, self.scene)
-        nearest = min((p.distance for p in k.scene_pairs), default=CLEARANCE_RANGE_M)
+        pair = min(k.scene_pairs, key=lambda p: p.distance, default=None)
+        nearest = CLEARANCE_RANGE_M if pair is None else pair.distance
         self._clearance = nearest
-        self.out.min_clearance_m = min(self.out.min_clearance_m, nearest)
+        if nearest < self.out.min_clearance_m:
+            self.out.min_clearance_m = nearest
+            self.out.min_clearance_pair = '' if pair is None else f'{pair.name_a} / {pair.name_b}'
 
     def _grasp_or_release(self, attach: bool | None, controller: ClosedLoopController | None):
         q = np.array(self.sim.q)
@@ -176,8 +181,11 @@ class Executor:
             self.world.attach(self.object_id, world_ee)
             obj = self.scenario.object(self.object_id)
             pose = self.world.state(self.object_id).pose
-            self.monitor.bodies.attach(
-                obj, world_ee.actInv(pose), self.planner_config.obstacle_min_distance_m + 0.002
+            self.monitor.bodies.attach(  # its top exact (#29), its bottom set down on the table
+                obj,
+                world_ee.actInv(pose),
+                self.planner_config.obstacle_min_distance_m + 0.002,
+                settle_top_m=0.0,
             )
             if controller is not None:
                 controller.attach(obj, pose, self.noise.measure(q))
@@ -235,6 +243,7 @@ def summary(mode: str, disturbance: str, label: str, run: Execution) -> dict:
         'max_error_mm': _round(float(errors.max()) if errors.size else math.nan),
         'placement_error_mm': _round(run.placement_error_m * 1e3),
         'min_clearance_mm': _round(run.min_clearance_m * 1e3),
+        'min_clearance_pair': run.min_clearance_pair,
         'time_to_complete_s': _round(run.duration_s),
         'step_median_us': _round(float(np.median(steps)) if steps.size else math.nan),
         'step_p99_us': _round(float(np.percentile(steps, 99)) if steps.size else math.nan),
