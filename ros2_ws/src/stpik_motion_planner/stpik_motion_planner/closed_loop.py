@@ -55,10 +55,11 @@ SETTLE_HOLD_S = 0.2
 # ... and no error of that window further than this from the window's mean [m]: the arm is at
 # rest (a hand passing through the plan at 5 cm/s spreads ±5 mm over the window; noise ~1 mm).
 SETTLE_SPREAD_M = 0.003
-# The carried object's collision body is this much shorter at its bottom [m]: the plan sets it
-# down ON the table (the planner shortens it by its margin + 2 mm), so the executor leaves room
-# for a few mm of overshoot there. Its top and sides are checked at their true size (#29: the
-# top was 20 mm short too, a graze of the carried top under 20 mm went unseen).
+# The carried object's collision body is this much shorter at its bottom against static bodies
+# [m]: the plan sets it down ON the table (the planner shortens it by its margin + 2 mm), so the
+# executor leaves room for a few mm of overshoot there. Against every other object, and at its
+# top and sides, it is checked at its true size (#29: 20 mm short at both ends against
+# everything, the carried bottom went 7.5 mm into an object standing on the drop slot).
 SETTLE_M = 0.02
 
 
@@ -69,11 +70,6 @@ SETTLE_M = 0.02
 # held back while the reference runs on, stays in the lead: that is what is checked).
 OFFSET_TIME_CONSTANT_S = 0.5
 REFERENCE_CLEARANCE_M = 0.0  # penetrating, it is a command into an object [m]
-# Longest tick the reference time follows [periods]: a measurement later than that (a stall of
-# the process) moves the reference by this much only. A loaded 2-core demo ticked at 27-62 Hz
-# instead of 100, and the reference, advancing one period per tick, ran at 27-62 % of the plan's
-# speed (the first segment of S1 then missed execution_timeout_s).
-MAX_TICK_PERIODS = 5
 STALL_RATE = 0.05  # reference time advancing slower than this share of real time: stalled
 
 
@@ -290,7 +286,6 @@ class ClosedLoopController:
         self._settle_s = 0.0
         self._settle_window: list[np.ndarray] = []  # EE errors (6,) of the last SETTLE_HOLD_S
         self._stalled_s = 0.0
-        self._first_tick = True
         self._offset = np.zeros(7)  # slow estimate of measured − streamed joints [rad] (7,)
 
     @property
@@ -306,7 +301,11 @@ class ClosedLoopController:
         """Carry ``obj`` (pose ``world_obj``) as grasped at the measured joints ``q_meas``."""
         world_ee = self.stpik.kinematics(np.asarray(q_meas, dtype=float), SceneWorld([]))
         self.stpik.bodies.attach(
-            obj, world_ee.world_ee.actInv(world_obj), settle_m=SETTLE_M, settle_top_m=0.0
+            obj,
+            world_ee.world_ee.actInv(world_obj),
+            settle_m=SETTLE_M,
+            settle_top_m=0.0,
+            settle_vs_static_only=True,
         )
 
     def detach(self) -> None:
@@ -322,15 +321,12 @@ class ClosedLoopController:
         self._settle_s = 0.0
         self._settle_window = []
         self._stalled_s = 0.0
-        self._first_tick = True
 
-    def step(self, q_meas: np.ndarray, elapsed_s: float | None = None) -> ControlTick:
+    def step(self, q_meas: np.ndarray) -> ControlTick:
         """One control tick from the measured joints ``q_meas`` [rad] (7,).
 
-        ``elapsed_s``: real time since the previous tick's measurement [s] (the node passes it):
-        the reference time advances by it, within ``control period`` and
-        :data:`MAX_TICK_PERIODS` periods, so a loop that ticks late still follows the plan's
-        timing. None: one control period (a loop at simulated time).
+        The reference time advances one control period per tick (times the slow-down rate), so
+        a loop that ticks late moves the reference slower, never in larger jumps.
 
         Returns:
             The tick (stream ``tick.q_ref``).
@@ -343,10 +339,6 @@ class ClosedLoopController:
         if self._motion is None or self.q_ref is None:
             raise ExecutionStopped('joint_state', 'step() before begin()')
         c = self.config
-        tick_s = c.period  # the first tick of a segment: the pause before it is not plan time
-        if elapsed_s is not None and not self._first_tick:
-            tick_s = min(max(float(elapsed_s), c.period), MAX_TICK_PERIODS * c.period)
-        self._first_tick = False
         q = np.array(q_meas, dtype=float)  # a copy: a read-only measurement reaches numba
         if q.shape != (7,) or not np.all(np.isfinite(q)):
             raise ExecutionStopped('joint_state', f'measured joints must be 7 finite angles: {q}')
@@ -356,7 +348,7 @@ class ClosedLoopController:
         error = pose_error(ee_ref, k.world_ee)
         error_m, error_rad = float(np.linalg.norm(error[:3])), float(np.linalg.norm(error[3:]))
         rate = self._time_scale(error_m)
-        dt = tick_s * rate
+        dt = c.period * rate
         t_next = min(self._t + dt, self._t_end) if self.phase == 'tracking' else self._t_end
         ee_next = self._motion.ee_at(t_next)
         self.ee_task.target = ee_ref
@@ -371,28 +363,28 @@ class ClosedLoopController:
         # tick for tick, so a limit cycle (held by a set-based task, creeping on a few ticks)
         # still ends with a stop instead of resetting the count forever.
         if rate < STALL_RATE:
-            self._stalled_s += tick_s
+            self._stalled_s += c.period
         else:
-            self._stalled_s = max(0.0, self._stalled_s - tick_s)
+            self._stalled_s = max(0.0, self._stalled_s - c.period)
         if self._stalled_s > c.settle_timeout_s:
             raise ExecutionStopped(
                 'tracking',
                 f'reference stalled for {self._stalled_s:.1f} s: '
                 + self._lost_message(k, error_m, error_rad, active),
             )
-        largest = float(np.max(np.abs(dq) / (self.step_limit * (tick_s / c.period))))
+        largest = float(np.max(np.abs(dq) / self.step_limit))
         if largest > 1.0:  # never ask for more than the velocity limits
             dq /= largest
         q_ref = np.clip(self.q_ref + dq, self.stpik.lower, self.stpik.upper)
         q_ref = np.clip(q_ref, q - c.max_lead_rad, q + c.max_lead_rad)
         # Where the arm goes: the reference plus the arm's steady offset from what it is sent
         # (an actuator offset the loop compensates; a lag shows up in it only slowly).
-        alpha = min(1.0, tick_s / OFFSET_TIME_CONSTANT_S)
+        alpha = min(1.0, c.period / OFFSET_TIME_CONSTANT_S)
         self._offset += alpha * ((q - self.q_ref) - self._offset)
         self._check_reference(q_ref + self._offset)  # up to max_lead_rad ahead (#29)
         self.q_ref = q_ref
         plan_time = self._t
-        self._advance(t_next, error, tick_s)
+        self._advance(t_next, error)
         clearance = min((p.distance for p in k.scene_pairs), default=np.inf)
         return ControlTick(
             plan_time,
@@ -420,10 +412,8 @@ class ClosedLoopController:
             return 1.0
         return max(0.0, 1.0 - (error_m - c.slow_down_error_m) / span)
 
-    def _advance(self, t_next: float, error: np.ndarray, tick_s: float) -> None:
-        """Move the reference time to ``t_next`` [s]; settle on the EE ``error`` (6,) [m, rad]
-        (``tick_s``: this tick's length [s]).
-        """
+    def _advance(self, t_next: float, error: np.ndarray) -> None:
+        """Move the reference time to ``t_next`` [s]; settle on the EE ``error`` (6,) [m, rad]."""
         c = self.config
         self._t = t_next
         if self.phase == 'tracking' and self._t >= self._t_end:
@@ -432,7 +422,7 @@ class ClosedLoopController:
             return
         window = self._settle_window
         window.append(np.array(error, dtype=float))
-        size = max(1, round(SETTLE_HOLD_S / tick_s))
+        size = max(1, round(SETTLE_HOLD_S / c.period))
         del window[:-size]
         mean = np.mean(window, axis=0)
         mean_m, mean_rad = float(np.linalg.norm(mean[:3])), float(np.linalg.norm(mean[3:]))
@@ -445,7 +435,7 @@ class ClosedLoopController:
         ):  # at rest on the plan, not passing through it
             self.phase = 'done'
             return
-        self._settle_s += tick_s
+        self._settle_s += c.period
         if self._settle_s > c.settle_timeout_s:
             raise ExecutionStopped(
                 'settle',

@@ -68,10 +68,11 @@ from stpik_motion_planner.execution_config import (
 )
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.scene_checks import format_id
-from stpik_motion_planner.state_watch import SilenceWatch
+from stpik_motion_planner.state_watch import ProgressWatch, SilenceWatch
 from stpik_motion_planner.undo import UNDONE, reversed_samples
 
 SCENE_FRAME = 'j2s7s300_link_base'  # frame of the EE poses in TrackingState
+SEGMENT_POLL_S = 0.1  # how often the service thread looks at a segment's progress [s]
 
 
 class Execution(TrajectoryExecution):
@@ -215,14 +216,28 @@ class Execution(TrajectoryExecution):
         return self._controller
 
     def _run_segment(self, motion: PlannedMotion, start: int, end: int, q_ref: np.ndarray) -> str:
-        """Track samples ``start`` to ``end`` of ``motion``; '' when done, else the stop."""
+        """Track samples ``start`` to ``end`` of ``motion``; '' when done, else the stop.
+
+        The loop moves the reference one control period per tick, so a loaded machine that
+        ticks late takes longer than the plan (the README demo ticked at 27 Hz instead of 100:
+        S1's first segment then ran 2.7x the plan's time and a fixed "duration +
+        execution_timeout_s" wait ended the goal). The wait ends when the reference time has
+        not advanced for ``execution_timeout_s`` (the controller stops a stalled or unsettled
+        arm itself sooner: ``settle_timeout_s``).
+        """
         timeout = self._node.get_parameter('execution_timeout_s').value
         self._segment_end.clear()
         with self._lock:
             self._live_controller.begin(motion, start, end, q_ref)
-        duration = motion.times[end] - motion.times[start]
-        if not self._segment_end.wait(duration + timeout):
-            self._stop(f'segment to sample {end} not done in {duration + timeout:.1f} s')
+        watch = ProgressWatch(self._live_controller.plan_time, time.monotonic())
+        while not self._segment_end.wait(SEGMENT_POLL_S):
+            plan_time = self._live_controller.plan_time
+            if watch.stalled_for(plan_time, time.monotonic()) > timeout:
+                self._stop(
+                    f'segment to sample {end} made no progress for {timeout:.1f} s '
+                    f'(execution_timeout_s; at {plan_time:.2f} s of '
+                    f'{motion.times[end]:.2f} s of the plan)'
+                )
         return self._stopped
 
     def _undone(
@@ -307,7 +322,6 @@ class Execution(TrajectoryExecution):
                         f'{silent:.1f} s, joint_state_timeout_s={silence_s:.1f})'
                     )
                 return
-            elapsed_s = self.state_time - self._last_state_time  # inf on the first tick
             self._last_state_time = self.state_time
             try:
                 if self._scene_dirty:
@@ -318,7 +332,7 @@ class Execution(TrajectoryExecution):
                         return
                     controller.set_scene(self._live_scene())
                     self._scene_dirty = False
-                tick = controller.step(np.array(self.q), elapsed_s)
+                tick = controller.step(np.array(self.q))
             except ExecutionStopped as err:
                 self._stop_locked(str(err))
                 return

@@ -280,6 +280,10 @@ class RobotBodies:
         self.attach_key: tuple | None = None
         self.attached_radius = 0.0  # bounding radius of the carried object [m]
         self._attached_offset = np.eye(4)  # the carried object's pose in the EE frame
+        # Bottom-shortened body of the carried object used against static bodies only, and its
+        # centre above the main body's along the object's z [m] (``settle_vs_static_only``).
+        self._attached_support: fcl.CollisionObject | None = None
+        self._support_delta = 0.0
         self._transforms.append(fcl.Transform())  # the carried object's
         self._placed = np.zeros(len(self.bodies) + 1, dtype=bool)
         # World placement of every body, homogeneous [m] (G + 1, 4, 4), last: the carried object.
@@ -322,6 +326,7 @@ class RobotBodies:
         transform_obj_to_ee: pin.SE3,
         settle_m: float = 0.0,
         settle_top_m: float | None = None,
+        settle_vs_static_only: bool = False,
     ) -> None:
         """Carry ``obj`` rigidly at ``transform_obj_to_ee`` (its pose in the EE frame).
 
@@ -332,15 +337,24 @@ class RobotBodies:
                 that setting it down on the table is not a collision (sideways margins stay).
             settle_top_m: this much shorter at its top [m]; None: ``settle_m`` (the planner's
                 symmetric body). The closed loop passes 0: the top end is checked exactly (#29).
+            settle_vs_static_only: shorten the bottom against *static* bodies only (the table
+                it is set down on); movable and placed objects meet the whole bottom (the
+                closed loop, #29: 20 mm of the carried bottom went into a placed object unseen).
         """
         top_m = settle_m if settle_top_m is None else settle_top_m
         full = obj.height if obj.shape == 'cylinder' else obj.size[2]
-        length = max(full - settle_m - top_m, 1e-3)
-        if obj.shape == 'cylinder':
-            geometry = fcl.Cylinder(obj.radius, length)
+        geometry = _carried_geometry(obj, max(full - settle_m - top_m, 1e-3))
+        self._support_delta = 0.0  # the support body's centre above the main one's [m]
+        self._attached_support = None
+        if settle_vs_static_only:  # main body: only the top cut; support body: both cuts
+            support = fcl.CollisionObject(geometry, fcl.Transform())
+            self.names[id(geometry)] = 'attached'
+            self._attached_support = support
+            geometry = _carried_geometry(obj, max(full - top_m, 1e-3))
+            self._support_delta = 0.5 * settle_m
+            settle_m_main = 0.0
         else:
-            sx, sy, _ = obj.size
-            geometry = fcl.Box(sx, sy, length)
+            settle_m_main = settle_m
         self.names[id(geometry)] = 'attached'
         self._attached_geometry = geometry
         across = obj.radius if obj.shape == 'cylinder' else 0.5 * math.hypot(*obj.size[:2])
@@ -348,13 +362,14 @@ class RobotBodies:
         self.attached = fcl.CollisionObject(geometry, fcl.Transform())
         # The body's centre: half the difference of the two cuts above the object's centre.
         shift = np.eye(4)
-        shift[2, 3] = 0.5 * (settle_m - top_m)
+        shift[2, 3] = 0.5 * (settle_m_main - top_m)
         self._attached_offset = np.array(transform_obj_to_ee.homogeneous) @ shift
         self.attach_key = (
             obj,
             transform_obj_to_ee.homogeneous.tobytes(),
             float(settle_m),
             float(top_m),
+            bool(settle_vs_static_only),
         )
         self._build_managers()
 
@@ -362,6 +377,7 @@ class RobotBodies:
         """Stop carrying the attached object."""
         if self.attached is not None:
             self.attached = None
+            self._attached_support = None
             self.attach_key = None
             self._build_managers()
 
@@ -410,6 +426,21 @@ class RobotBodies:
             self._objects[index].setTransform(tf)
             self._placed[index] = True
         return self._objects[index]
+
+    def _scene_body(self, index: int, obj: ObjectSpec) -> fcl.CollisionObject:
+        """The fcl object of body ``index`` against scene object ``obj``: the carried object's
+        bottom-shortened support body against a static one (``settle_vs_static_only``).
+        """
+        body = self._body(index)
+        support = self._attached_support
+        if support is None or index != len(self.bodies) or obj.role != 'static':
+            return body
+        placement = self._placements[index]
+        tf = fcl.Transform(
+            placement[:3, :3], placement[:3, 3] + placement[:3, 2] * self._support_delta
+        )
+        support.setTransform(tf)
+        return support
 
     def self_proximities(self, threshold: float) -> list[Proximity]:
         """Pairs of the self-hit list closer than ``threshold`` [m].
@@ -501,7 +532,7 @@ class RobotBodies:
         index = self._scene_index
         for body, obj in zip(*culled, strict=True):
             result = self._fresh_result()
-            robot = self._body(int(index[body]))
+            robot = self._scene_body(int(index[body]), scene.specs[obj])
             if fcl.distance(robot, scene.bodies[obj], _REQUEST, result) <= threshold:
                 if self.recorders:
                     self._record(scene, threshold, True, culled, [int(obj)])
@@ -524,7 +555,7 @@ class RobotBodies:
         hits: list[int] = []
         for body, obj in zip(*culled, strict=True):
             result = self._fresh_result()
-            robot = self._body(int(index[body]))
+            robot = self._scene_body(int(index[body]), scene.specs[obj])
             distance = fcl.distance(robot, scene.bodies[obj], _REQUEST, result)
             if distance < threshold:
                 pa, pb = result.nearest_points
@@ -533,6 +564,14 @@ class RobotBodies:
         if self.recorders:
             self._record(scene, threshold, False, culled, hits)
         return found
+
+
+def _carried_geometry(obj: ObjectSpec, length: float) -> fcl.CollisionGeometry:
+    """The carried object's fcl geometry, ``length`` [m] along its axis."""
+    if obj.shape == 'cylinder':
+        return fcl.Cylinder(obj.radius, length)
+    sx, sy, _ = obj.size
+    return fcl.Box(sx, sy, length)
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,12 @@ from stpik_motion_planner.exceptions import InvalidConfig, MotionPlannerError
 from stpik_motion_planner.grasps import GRASP_FAMILIES, check_families
 
 EXTRA = {  # name: (default, low, high, description)
-    'execution_timeout_s': (30.0, 0.1, 600.0, 'time for the sim to follow a segment [s]'),
+    'execution_timeout_s': (
+        30.0,
+        0.1,
+        600.0,
+        "open loop: time beyond a segment's duration; closed loop: longest stall [s]",
+    ),
     'goal_tolerance_rad': (0.02, 1e-4, 0.5, 'joint error at which a segment is reached [rad]'),
     'joint_state_timeout_s': (  # 3 s: a loaded 2-core demo once saw a 1.1 s callback gap
         3.0,

@@ -1,4 +1,5 @@
-"""When is the arm's joint-state stream silent, and when has an open-loop segment arrived?
+"""When is the arm's joint-state stream silent, when has an open-loop segment arrived, and when
+has a closed-loop segment stopped making progress?
 
 Plain Python (no ROS): the execution classes of the ``motion_planner`` node call these with
 ``time.monotonic()`` times and the last ``sensor_msgs/JointState``.
@@ -42,6 +43,25 @@ class SilenceWatch:
             self._since = now  # we were not running: the gap is ours, not the publisher's
         self._last_check = now
         return now - max(last_message_time, self._since)
+
+
+class ProgressWatch:
+    """Time [s] since a closed-loop segment's reference last advanced along the plan.
+
+    The closed loop moves its reference one control period per tick, so a machine that ticks
+    late follows the plan slower but still follows it (the README demo ticked at 27 Hz instead
+    of 100); a wait of "the segment's duration + a margin" ended such a segment as failed. What
+    is wrong is a reference that does not move at all.
+    """
+
+    def __init__(self, plan_time: float, now: float) -> None:
+        self._plan_time, self._since = plan_time, now
+
+    def stalled_for(self, plan_time: float, now: float) -> float:
+        """Seconds at ``now`` [s] since the reference time (``plan_time`` [s]) last changed."""
+        if plan_time != self._plan_time:
+            self._plan_time, self._since = plan_time, now
+        return now - self._since
 
 
 def arrived(

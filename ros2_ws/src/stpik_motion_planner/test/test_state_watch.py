@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from stpik_motion_planner.state_watch import SETTLED_RAD_S, SilenceWatch, arrived
+from stpik_motion_planner.state_watch import SETTLED_RAD_S, ProgressWatch, SilenceWatch, arrived
 
 
 def test_silence_grows_while_checks_come_on_time() -> None:
@@ -58,3 +58,14 @@ def test_arrival_needs_the_segment_time_and_the_tolerance() -> None:
     assert not arrived(None, 0.0, GOAL, 0.1, elapsed_s=5.0, duration_s=4.0)  # no joint state
     assert arrived(q, None, GOAL, 0.1, elapsed_s=5.0, duration_s=4.0)  # no velocities published
     assert not arrived(q, SETTLED_RAD_S, GOAL, 0.1, elapsed_s=5.0, duration_s=4.0)
+
+
+def test_a_slow_segment_is_not_stalled_while_its_reference_moves() -> None:
+    """The README demo ticked at 27 Hz instead of 100: its first segment took 2.7x the plan's
+    time and a fixed "duration + execution_timeout_s" wait failed it. Only a reference that
+    does not move for the timeout counts."""
+    watch = ProgressWatch(plan_time=0.0, now=100.0)
+    for k in range(1, 500):  # 0.1 s of wall time, 0.0027 s of plan time per look: 50 s in all
+        assert watch.stalled_for(plan_time=0.0027 * k, now=100.0 + 0.1 * k) == 0.0
+    assert watch.stalled_for(plan_time=0.0027 * 499, now=100.0 + 0.1 * 499 + 31.0) == 31.0
+    assert watch.stalled_for(plan_time=2.0, now=200.0) == 0.0  # moving again: the count restarts

@@ -181,11 +181,12 @@ class Executor:
             self.world.attach(self.object_id, world_ee)
             obj = self.scenario.object(self.object_id)
             pose = self.world.state(self.object_id).pose
-            self.monitor.bodies.attach(  # its top exact (#29), its bottom set down on the table
+            self.monitor.bodies.attach(  # exact (#29) but its bottom against the table
                 obj,
                 world_ee.actInv(pose),
                 self.planner_config.obstacle_min_distance_m + 0.002,
                 settle_top_m=0.0,
+                settle_vs_static_only=True,
             )
             if controller is not None:
                 controller.attach(obj, pose, self.noise.measure(q))
