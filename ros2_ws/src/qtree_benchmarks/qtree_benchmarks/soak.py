@@ -24,7 +24,7 @@ import xml.etree.ElementTree as ET
 from collections import Counter
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from qtree_node_support.orchestration import NodeProcess, allocate_domain_id, start_node
 
@@ -152,6 +152,43 @@ def run_pytest(paths: list[str], junit_xml: Path, extra: list[str] | None = None
         return subprocess.call(command, cwd=REPO_ROOT, stdout=log, stderr=subprocess.STDOUT)
 
 
+Outcome = tuple[int, list[str], bool]  # a run's exit code, the tests it failed, whether it passed
+_R = TypeVar('_R')
+
+
+def repeat_runs(
+    runs: int,
+    run: Callable[[int], _R],
+    judge: Callable[[int, _R], Outcome],
+    progress: Callable[[int, list[str]], Any] | None = None,
+) -> dict[str, Any]:
+    """``run(i)`` for i in 0..runs-1 in a row, each timed, then judged by ``judge(i, done)``.
+
+    Returns:
+        ``runs``, ``passed`` (runs judged passed), ``failed_tests`` (test id → number of runs it
+        failed in), ``exit_codes`` and ``run_seconds`` (one per run; ``run`` alone is timed).
+    """
+    failures: Counter[str] = Counter()
+    passed, seconds, codes = 0, [], []
+    for i in range(runs):
+        start = time.monotonic()
+        done = run(i)
+        seconds.append(round(time.monotonic() - start, 1))
+        code, failed, ok = judge(i, done)
+        codes.append(code)
+        passed += ok
+        failures.update(failed)
+        if progress is not None:
+            progress(i, failed)
+    return {
+        'runs': runs,
+        'passed': passed,
+        'failed_tests': dict(failures),
+        'exit_codes': codes,
+        'run_seconds': seconds,
+    }
+
+
 def repeat_tests(
     paths: list[str],
     runs: int,
@@ -165,26 +202,14 @@ def repeat_tests(
         of runs it failed in), ``run_seconds`` and ``exit_codes`` (one per run).
     """
     work_dir.mkdir(parents=True, exist_ok=True)
-    failures: Counter[str] = Counter()
-    passed, seconds, exit_codes = 0, [], []
-    for i in range(runs):
-        junit = work_dir / f'run_{i}.xml'
-        start = time.monotonic()
-        code = run_pytest(paths, junit)
-        seconds.append(round(time.monotonic() - start, 1))
-        failed = failed_tests(junit)
-        exit_codes.append(code)
-        passed += code == 0 and not failed
-        failures.update(failed)
-        if progress is not None:
-            progress(i, failed)
-    return {
-        'runs': runs,
-        'passed': passed,
-        'failed_tests': dict(failures),
-        'exit_codes': exit_codes,
-        'run_seconds': seconds,
-    }
+
+    def judge(i: int, code: int) -> Outcome:
+        failed = failed_tests(work_dir / f'run_{i}.xml')
+        return code, failed, code == 0 and not failed
+
+    return repeat_runs(
+        runs, lambda i: run_pytest(paths, work_dir / f'run_{i}.xml'), judge, progress
+    )
 
 
 def repeat_tests_parallel(
@@ -276,11 +301,9 @@ def repeat_fresh_clone(
     commit = subprocess.run(
         ['git', 'rev-parse', 'HEAD'], cwd=clone, capture_output=True, text=True
     ).stdout.strip()
-    failures: Counter[str] = Counter()
-    passed, seconds, codes = 0, [], []
-    for i in range(runs):
-        start = time.monotonic()
-        done = subprocess.run(
+
+    def run(i: int) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
             FRESH_CLONE_COMMAND,
             cwd=clone,
             env=clean_environment(),
@@ -288,24 +311,16 @@ def repeat_fresh_clone(
             stderr=subprocess.STDOUT,
             text=True,
         )
-        seconds.append(round(time.monotonic() - start, 1))
+
+    def judge(i: int, done: subprocess.CompletedProcess[str]) -> Outcome:
         (work_dir / f'fresh_run_{i}.log').write_text(done.stdout)
         failed = summary_failures(done.stdout)
         if done.returncode != 0 and not failed:
             failed = [f'<exit code {done.returncode}, no test named: see fresh_run_{i}.log>']
-        codes.append(done.returncode)
-        passed += done.returncode == 0
-        failures.update(failed)
-        if progress is not None:
-            progress(i, failed)
-    return {
-        'fresh_clone_runs': runs,
-        'fresh_clone_passed': passed,
-        'fresh_clone_failed_tests': dict(failures),
-        'fresh_clone_exit_codes': codes,
-        'fresh_clone_run_seconds': seconds,
-        'commit': commit,
-    }
+        return done.returncode, failed, done.returncode == 0
+
+    tally = repeat_runs(runs, run, judge, progress)
+    return {**{f'fresh_clone_{key}': value for key, value in tally.items()}, 'commit': commit}
 
 
 def default_work_dir() -> Path:

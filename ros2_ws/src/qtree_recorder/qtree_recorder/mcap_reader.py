@@ -83,38 +83,41 @@ class TopicInfo:
 
 
 @dataclass(frozen=True)
-class RawMessage:
-    """One recorded message as CDR bytes (what ``ros2 bag play`` publishes).
+class RecordedMessage:
+    """Where and when one message was recorded (the first fields of every message read).
 
     Attributes:
         topic: topic name.
         type: ROS type name.
         log_time_ns: time the recorder received it [ns since epoch].
-        publish_time_ns: time it was published [ns since epoch] (= log time when unknown).
-        data: serialized message (CDR, with encapsulation header).
     """
 
     topic: str
     type: str
     log_time_ns: int
+
+
+@dataclass(frozen=True)
+class RawMessage(RecordedMessage):
+    """One recorded message as CDR bytes (what ``ros2 bag play`` publishes).
+
+    Attributes:
+        publish_time_ns: time it was published [ns since epoch] (= log time when unknown).
+        data: serialized message (CDR, with encapsulation header).
+    """
+
     publish_time_ns: int
     data: bytes
 
 
 @dataclass(frozen=True)
-class DecodedMessage:
+class DecodedMessage(RecordedMessage):
     """One recorded message decoded from the embedded definition.
 
     Attributes:
-        topic: topic name.
-        type: ROS type name.
-        log_time_ns: time the recorder received it [ns since epoch].
         message: decoded message with the fields of the ``.msg`` as attributes.
     """
 
-    topic: str
-    type: str
-    log_time_ns: int
     message: Any
 
 

@@ -44,6 +44,9 @@ class Recording:
         tf_rate_hz: largest rate of ``/tf`` messages from joint states [Hz]; 0 = every state.
         warn: called with a message when something derived cannot be written (the raw
             recording is unaffected); defaults to this module's logger.
+
+    Attributes:
+        record: writes one received message unchanged: the log's :meth:`McapLog.write`.
     """
 
     def __init__(
@@ -55,6 +58,7 @@ class Recording:
         warn: Callable[[str], None] | None = None,
     ) -> None:
         self.log = log
+        self.record = log.write
         self._encoder = DynamicEncoder(definitions)
         self._warn = warn or logging.getLogger(__name__).warning
         self._tf_period_ns = 0
@@ -79,18 +83,6 @@ class Recording:
         if key not in self._warned:
             self._warned.add(key)
             self._warn(message)
-
-    def record(
-        self,
-        topic: str,
-        type_name: str,
-        cdr: bytes,
-        log_time_ns: int,
-        qos: Sequence[QosProfileData] = (),
-        type_hash: str = '',
-    ) -> None:
-        """Write one received message unchanged (see :meth:`McapLog.write`)."""
-        self.log.write(topic, type_name, cdr, log_time_ns, qos, type_hash=type_hash)
 
     def _write_tf(self, topic: str, transforms: Sequence[FrameTransform], t_ns: int) -> None:
         qos = TF_STATIC_QOS if topic == TF_STATIC_TOPIC else TF_QOS

@@ -75,7 +75,7 @@ class RecordWriter:
     def _process(self, topic, type_name, raw, t_ns, offers, type_hash) -> None:
         rec = self.recording
         if rec is not None:
-            rec.record(topic, type_name, raw, t_ns, offers, type_hash)
+            rec.record(topic, type_name, raw, t_ns, offers, type_hash=type_hash)
         if type_name == 'sensor_msgs/msg/JointState':
             msg = deserialize_message(raw, JointState)
             if rec is not None:

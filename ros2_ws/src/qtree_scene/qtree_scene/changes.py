@@ -9,7 +9,7 @@ the ones they expect to move (the carried object, the objects relocated so far).
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Mapping
+from collections.abc import Callable, Collection, Mapping
 from typing import Any
 
 from qtree_node_support.text import quote
@@ -23,9 +23,9 @@ STATUS_IN_CLUTTER = 0  # ObjectState.STATUS_IN_CLUTTER
 STATUS_RELOCATED = 2  # ObjectState.STATUS_RELOCATED
 
 
-def clutter_objects(msg: Any, ignore: Collection[str] = ()) -> dict[str, ObjectSpec]:
-    """The objects of a decoded ``qtree_msgs/Scene`` that stand IN_CLUTTER, by id, as they are
-    now (current pose), without the ids in ``ignore``.
+def _objects_where(msg: Any, keep: Callable[[ObjectSpec, int], bool]) -> dict[str, ObjectSpec]:
+    """The objects of a decoded ``qtree_msgs/Scene``, by id, as they are now, for which
+    ``keep(spec, status)`` holds (``status``: the object's ``ObjectState`` status).
 
     Raises:
         ScenarioError: a malformed message (see :func:`~qtree_scene.message.scenario_from_msg`).
@@ -34,8 +34,20 @@ def clutter_objects(msg: Any, ignore: Collection[str] = ()) -> dict[str, ObjectS
     return {
         spec.id: spec
         for spec, obj in zip(specs, msg.objects, strict=True)
-        if obj.status == STATUS_IN_CLUTTER and spec.id not in ignore
+        if keep(spec, obj.status)
     }
+
+
+def clutter_objects(msg: Any, ignore: Collection[str] = ()) -> dict[str, ObjectSpec]:
+    """The objects of a decoded ``qtree_msgs/Scene`` that stand IN_CLUTTER, by id, as they are
+    now (current pose), without the ids in ``ignore``.
+
+    Raises:
+        ScenarioError: a malformed message (see :func:`~qtree_scene.message.scenario_from_msg`).
+    """
+    return _objects_where(
+        msg, lambda spec, status: status == STATUS_IN_CLUTTER and spec.id not in ignore
+    )
 
 
 def standing_objects(
@@ -49,16 +61,15 @@ def standing_objects(
     Raises:
         ScenarioError: a malformed message (see :func:`~qtree_scene.message.scenario_from_msg`).
     """
-    specs = scenario_from_msg(msg).objects
-    return {
-        spec.id: spec
-        for spec, obj in zip(specs, msg.objects, strict=True)
-        if spec.id != moving
-        and (
-            (obj.status == STATUS_IN_CLUTTER and spec.id not in left_out)
-            or obj.status == STATUS_RELOCATED
-        )
-    }
+
+    def keep(spec: ObjectSpec, status: int) -> bool:
+        if spec.id == moving:
+            return False
+        return (
+            status == STATUS_IN_CLUTTER and spec.id not in left_out
+        ) or status == STATUS_RELOCATED
+
+    return _objects_where(msg, keep)
 
 
 def scene_changes(

@@ -44,6 +44,7 @@ from qtree_scene.exceptions import ScenarioError
 from qtree_scene.footprint import Footprint
 from qtree_scene.hand_access import free_yaws
 from qtree_scene.layouts import (
+    Region,
     Shape,
     accessible_layout,
     in_clutter,
@@ -223,17 +224,18 @@ def generate_clutter(
     smallest = (2 * max(s.bound for s in shapes) + gap) * math.sqrt(n) * 1.5
     if n <= SMALL_SCENE and depth < smallest:  # room for a tiny scene's objects
         depth, width = smallest, ASPECT * smallest
+    region = Region(depth, width, x_min, gap, attempts)
     footprints, target = None, None
     if layout == 'accessible':
         for _ in range(LAYOUT_RESTARTS):
-            found = accessible_layout(rng, shapes, depth, width, x_min, gap, attempts)
+            found = accessible_layout(rng, shapes, region)
             if found is not None:
                 footprints, target = found, 0
                 if in_clutter(0, found, shapes) and not free_yaws(found[0].center, found[1:]):
                     break  # every planner approach blocked in the 2-D model
     else:
         for _ in range(LAYOUT_RESTARTS):
-            footprints = uniform_layout(rng, shapes, depth, width, x_min, gap, attempts)
+            footprints = uniform_layout(rng, shapes, region)
             if footprints is not None:
                 target = pick_target(rng, footprints, shapes)
                 if target is not None:

@@ -11,8 +11,9 @@ object stands among the clutter. Shapes are drawn by :mod:`qtree_scene.generator
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from jaco2_description.model import HAND_OPENING_M
@@ -69,14 +70,31 @@ def in_side_grasp_workspace(position: tuple[float, ...]) -> bool:
     return low <= reach <= high and azimuth <= WORKSPACE_AZIMUTH_RAD
 
 
-def candidate(
-    rng: np.random.Generator, s: Shape, depth: float, width: float, x_min: float
-) -> Footprint:
+@dataclass(frozen=True)
+class Region:
+    """The clutter rectangle and how a layout places objects in it.
+
+    Attributes:
+        depth: extent along x [m].
+        width: extent along y, centred on y = 0 [m].
+        x_min: x of the rectangle's edge nearer the base [m].
+        gap: least clearance between two objects [m].
+        attempts: random poses tried per object before the layout gives up.
+    """
+
+    depth: float
+    width: float
+    x_min: float
+    gap: float
+    attempts: int
+
+
+def candidate(rng: np.random.Generator, s: Shape, region: Region) -> Footprint:
     """One random pose of shape ``s`` inside the clutter rectangle."""
     b = s.bound
     centre = (
-        float(rng.uniform(x_min + b, x_min + depth - b)),
-        float(rng.uniform(-width / 2 + b, width / 2 - b)),
+        float(rng.uniform(region.x_min + b, region.x_min + region.depth - b)),
+        float(rng.uniform(-region.width / 2 + b, region.width / 2 - b)),
     )
     if s.box:
         yaw = float(rng.uniform(-math.pi / 2, math.pi / 2))
@@ -95,28 +113,57 @@ def overlaps_any(fp: Footprint, placed: Iterable[Footprint], gap: float) -> bool
     )
 
 
+Accept = Callable[[int, Mapping[int, Footprint], Footprint], bool]  # (k, placed, pose)
+
+
+def first_accepted(
+    rng: np.random.Generator, s: Shape, region: Region, accept: Callable[[Footprint], bool]
+) -> Footprint | None:
+    """The first of ``region.attempts`` random poses of ``s`` that ``accept`` takes, or None
+    (also when ``s`` is wider than the rectangle).
+    """
+    if 2 * s.bound > min(region.depth, region.width):
+        return None
+    for _ in range(region.attempts):
+        fp = candidate(rng, s, region)
+        if accept(fp):
+            return fp
+    return None
+
+
+def sequential_addition(
+    rng: np.random.Generator, shapes: list[Shape], order: list[int], region: Region, accept: Accept
+) -> list[Footprint] | None:
+    """Random sequential addition of ``shapes`` in ``order``; None when an object does not fit.
+
+    Each object takes the first random pose for which ``accept(k, placed, pose)`` holds
+    (``placed``: the footprints placed so far, by shape index).
+    """
+    placed: dict[int, Footprint] = {}
+    for k in order:
+        fp = first_accepted(rng, shapes[k], region, partial(accept, k, placed))
+        if fp is None:
+            return None
+        placed[k] = fp
+    return [placed[k] for k in range(len(shapes))]
+
+
+def largest_first(shapes: list[Shape], indices: Iterable[int]) -> list[int]:
+    """``indices`` ordered by decreasing footprint area (ties in their order)."""
+    return sorted(indices, key=lambda i: -shapes[i].area)
+
+
 def uniform_layout(
-    rng: np.random.Generator,
-    shapes: list[Shape],
-    depth: float,
-    width: float,
-    x_min: float,
-    gap: float,
-    attempts: int,
+    rng: np.random.Generator, shapes: list[Shape], region: Region
 ) -> list[Footprint] | None:
     """Random sequential addition, largest footprint first; None when an object does not fit."""
-    placed: dict[int, Footprint] = {}
-    for k in sorted(range(len(shapes)), key=lambda i: -shapes[i].area):
-        if 2 * shapes[k].bound > min(depth, width):
-            return None
-        for _ in range(attempts):
-            fp = candidate(rng, shapes[k], depth, width, x_min)
-            if not overlaps_any(fp, placed.values(), gap):
-                placed[k] = fp
-                break
-        else:
-            return None
-    return [placed[k] for k in range(len(shapes))]
+
+    def accept(k: int, placed: Mapping[int, Footprint], fp: Footprint) -> bool:
+        return not overlaps_any(fp, placed.values(), region.gap)
+
+    return sequential_addition(
+        rng, shapes, largest_first(shapes, range(len(shapes))), region, accept
+    )
 
 
 def movable(shape: Shape, center: tuple[float, float]) -> bool:
@@ -131,13 +178,7 @@ def movable(shape: Shape, center: tuple[float, float]) -> bool:
 
 
 def accessible_layout(
-    rng: np.random.Generator,
-    shapes: list[Shape],
-    depth: float,
-    width: float,
-    x_min: float,
-    gap: float,
-    attempts: int,
+    rng: np.random.Generator, shapes: list[Shape], region: Region
 ) -> list[Footprint] | None:
     """Random sequential addition that keeps the scene clearable by side grasps, or None.
 
@@ -150,32 +191,27 @@ def accessible_layout(
     approaches. Removing the objects counted on in the reverse order of placement then always
     finds a free approach for each, the target last: the scene is clearable for the 2-D model.
     """
-    order = [0, *sorted(range(1, len(shapes)), key=lambda i: -shapes[i].area)]
-    placed: dict[int, Footprint] = {}
     free: dict[int, set[float]] = {}  # counted on for removal -> its free approaches [rad]
-    for k in order:
-        if 2 * shapes[k].bound > min(depth, width):
-            return None
-        for _ in range(attempts):
-            fp = candidate(rng, shapes[k], depth, width, x_min)
-            if k == 0 and not movable(shapes[0], fp.center):
-                continue
-            if overlaps_any(fp, placed.values(), gap):
-                continue
-            if movable(shapes[k], fp.center):
-                yaws = free_yaws(fp.center, placed.values(), CLEARING_APPROACHES)
-                if yaws:
-                    free[k] = set(yaws)
-                    break
-            hits = {p: blocked_yaws(placed[p].center, y, fp) for p, y in free.items()}
-            if all(free[p] - hits[p] for p in free):
-                for p in free:
-                    free[p] -= hits[p]
-                break
-        else:
-            return None
-        placed[k] = fp
-    return [placed[k] for k in range(len(shapes))]
+
+    def accept(k: int, placed: Mapping[int, Footprint], fp: Footprint) -> bool:
+        if k == 0 and not movable(shapes[0], fp.center):
+            return False
+        if overlaps_any(fp, placed.values(), region.gap):
+            return False
+        if movable(shapes[k], fp.center):
+            yaws = free_yaws(fp.center, placed.values(), CLEARING_APPROACHES)
+            if yaws:
+                free[k] = set(yaws)
+                return True
+        hits = {p: blocked_yaws(placed[p].center, y, fp) for p, y in free.items()}
+        if all(free[p] - hits[p] for p in free):
+            for p in free:
+                free[p] -= hits[p]
+            return True
+        return False
+
+    order = [0, *largest_first(shapes, range(1, len(shapes)))]
+    return sequential_addition(rng, shapes, order, region, accept)
 
 
 def in_clutter(k: int, footprints: list[Footprint], shapes: list[Shape]) -> bool:

@@ -27,6 +27,7 @@ from qtree_task_planner.training import (
     EpisodeCallback,
     EpisodeStats,
     QTreeTrainer,
+    TrainerBase,
     TrainingConfig,
     TrainingResult,
 )
@@ -51,7 +52,7 @@ def canonical_planner_name(name: str) -> str:
         raise UnknownPolicyError(name, PLANNER_NAMES) from None
 
 
-class BlockerSearchTrainer:
+class BlockerSearchTrainer(TrainerBase):
     """BLOCKER-SEARCH behind the trainer surface of :class:`QTreeTrainer`.
 
     Args:
@@ -61,18 +62,11 @@ class BlockerSearchTrainer:
         config: ``max_episodes`` = planner-run budget, ``time_limit_s`` = wall-time cap.
     """
 
-    def __init__(
-        self,
-        movable_ids: tuple[str, ...],
-        target_id: str,
-        oracle: FeasibilityOracle,
-        config: TrainingConfig,
-    ) -> None:
-        self.config = config
-        self.oracle = oracle
+    def _build(self, movable_ids: tuple[str, ...], target_id: str) -> None:
+        """The tree of tested orders and the search (see the class)."""
+        config, oracle = self.config, self.oracle
         self.policy = SimpleNamespace(name=BLOCKER_SEARCH, learns=True)
         self.tree = QTree(target_id, config.alpha, config.gamma, share_sets=True)
-        self.history: list[EpisodeStats] = []
         self.search_result: BlockerSearchResult | None = None
         obstacles = tuple(o for o in movable_ids if o != target_id)
         budget = BlockerSearchConfig(
@@ -82,11 +76,6 @@ class BlockerSearchTrainer:
         self.search = BlockerSearch(obstacles, target_id, oracle, budget, self._on_candidate)
         self._callback: EpisodeCallback | None = None
         self._best: tuple[str, ...] = ()
-
-    @property
-    def episode(self) -> int:
-        """Candidates tested so far."""
-        return len(self.history)
 
     def _on_candidate(self, walked: tuple[str, ...], reached: bool) -> bool:
         new_edges = 0

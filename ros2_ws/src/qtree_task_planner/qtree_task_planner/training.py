@@ -195,7 +195,42 @@ def first_optimal_episode(history: list[EpisodeStats], optimal_level: int) -> in
 EpisodeCallback = Callable[[EpisodeStats], bool]
 
 
-class QTreeTrainer:
+class TrainerBase:
+    """What every trainer holds: its configuration, its oracle and one statistics per episode.
+
+    The constructor keeps ``config`` and ``oracle``, starts an empty ``history`` and hands the
+    action set to :meth:`_build`, where a subclass builds its own state.
+
+    Args:
+        movable_ids: the action set, obstacles then target (``Scenario.movable_ids``).
+        target_id: id of the target T.
+        oracle: feasibility oracle (motion planner).
+        config: hyper-parameters.
+    """
+
+    def __init__(
+        self,
+        movable_ids: tuple[str, ...],
+        target_id: str,
+        oracle: FeasibilityOracle,
+        config: TrainingConfig,
+    ) -> None:
+        self.config = config
+        self.oracle = oracle
+        self.history: list[EpisodeStats] = []
+        self._build(movable_ids, target_id)
+
+    def _build(self, movable_ids: tuple[str, ...], target_id: str) -> None:
+        """Build the subclass's state (called once, by the constructor)."""
+        raise NotImplementedError
+
+    @property
+    def episode(self) -> int:
+        """Episodes run so far (BLOCKER-SEARCH: candidates tested)."""
+        return len(self.history)
+
+
+class QTreeTrainer(TrainerBase):
     """Runs Algorithm 1 episode by episode; its state stays readable after an error.
 
     Args:
@@ -208,15 +243,9 @@ class QTreeTrainer:
         InvalidParameterError: bad configuration or unknown policy.
     """
 
-    def __init__(
-        self,
-        movable_ids: tuple[str, ...],
-        target_id: str,
-        oracle: FeasibilityOracle,
-        config: TrainingConfig,
-    ) -> None:
-        self.config = config
-        self.oracle = oracle
+    def _build(self, movable_ids: tuple[str, ...], target_id: str) -> None:
+        """The policy, the tree, the random generator and the counters (see the class)."""
+        config = self.config
         self.policy: Policy = make_policy(
             config.policy,
             tuple(movable_ids),
@@ -235,15 +264,9 @@ class QTreeTrainer:
             optimistic_over=tuple(movable_ids) if self.policy.optimistic else None,
         )
         self.rng = np.random.default_rng(config.seed)
-        self.history: list[EpisodeStats] = []
-        self._runs_at_start = oracle.planner_runs
+        self._runs_at_start = self.oracle.planner_runs
         self._steady_count = 0
         self._started = time.monotonic()
-
-    @property
-    def episode(self) -> int:
-        """Episodes run so far."""
-        return len(self.history)
 
     @property
     def converged(self) -> bool:

@@ -19,6 +19,7 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from qtree_scene.generator import LAYOUTS
 from stpik_motion_planner.grasps import GRASP_FAMILIES, check_families
@@ -171,6 +172,21 @@ def write(records: list[dict], meta: dict, out: Path, stem: str) -> None:
     print(report)
 
 
+BUDGETS = (  # the ScaleTask budgets the command line sets, also written to the meta
+    'exact_max_runs',
+    'exact_time_s',
+    'learner_episodes',
+    'learner_time_s',
+    'search_max_runs',
+    'search_time_s',
+)
+
+
+def budgets(args: argparse.Namespace) -> dict[str, Any]:
+    """Every method's budget from the parsed command line, by :class:`ScaleTask` field."""
+    return {name: getattr(args, name) for name in BUDGETS}
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run (or merge) the scale benchmark, write ``scale*.json/.md/.png``."""
     args = parse_args(argv)
@@ -186,14 +202,9 @@ def main(argv: list[str] | None = None) -> int:
             seed=args.seed + i,
             oracle=args.oracle,
             methods=tuple(args.methods),
-            exact_max_runs=args.exact_max_runs,
-            exact_time_s=args.exact_time_s,
-            learner_episodes=args.learner_episodes,
-            learner_time_s=args.learner_time_s,
-            search_max_runs=args.search_max_runs,
-            search_time_s=args.search_time_s,
             layout=layout,
             grasp_families=args.grasp_families,
+            **budgets(args),
         )
         for layout in args.layouts
         for n in args.n
@@ -211,12 +222,7 @@ def main(argv: list[str] | None = None) -> int:
         'side_grasps': scene_total(records, 'side_grasps'),
         'scenes': args.scenes,
         'workers': args.workers,
-        'exact_max_runs': args.exact_max_runs,
-        'exact_time_s': args.exact_time_s,
-        'learner_episodes': args.learner_episodes,
-        'learner_time_s': args.learner_time_s,
-        'search_max_runs': args.search_max_runs,
-        'search_time_s': args.search_time_s,
+        **budgets(args),
         'wall_time_s': time.monotonic() - started,
         'notes': NOTES,
     }

@@ -19,8 +19,9 @@ certified optimum); a scene with neither counts as not optimal for every method.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from qtree_scene.generator import Layout
@@ -32,6 +33,7 @@ from qtree_task_planner.training import QTreeTrainer, TrainingConfig
 
 METHODS = ('exact', 'H-EG', 'H-EG-SET', 'BLOCKER-SEARCH')
 CLEAR_ZONE = '<empty drop zone>'  # marks a verification query's key (never an object id)
+_T = TypeVar('_T')
 
 
 @dataclass(frozen=True)
@@ -138,17 +140,7 @@ class MethodOracle:
     def answer(self, relocated: tuple[str, ...], object_id: str) -> FeasibilityAnswer:
         """The scene's answer; a new pair past a budget raises :class:`BudgetExceededError`."""
         key = (frozenset(relocated), object_id)
-        if key not in self._seen:
-            if self.planner_runs >= self.max_runs:
-                raise BudgetExceededError('planner_runs')
-            if time.monotonic() > self.deadline:
-                raise BudgetExceededError('time')
-            answer = self.scene.answer(relocated, object_id)
-            self._seen.add(key)
-            self.planner_runs += 1
-            self.charged_s += self.scene.cost_s[key]
-            return answer
-        return self.scene.answer(relocated, object_id)  # memoised: no planner run
+        return self._charged(key, lambda: self.scene.answer(relocated, object_id))
 
     def approach_blockers(
         self, relocated: tuple[str, ...], object_id: str
@@ -165,17 +157,23 @@ class MethodOracle:
         if not self.scene.has_clear_zone:
             return self.feasible(relocated, object_id)
         key = clear_key(relocated, object_id)
-        if key not in self._seen:
-            if self.planner_runs >= self.max_runs:
-                raise BudgetExceededError('planner_runs')
-            if time.monotonic() > self.deadline:
-                raise BudgetExceededError('time')
-            answer = self.scene.clear_zone(relocated, object_id)
-            self._seen.add(key)
-            self.planner_runs += 1
-            self.charged_s += self.scene.cost_s[key]
-            return answer
-        return self.scene.clear_zone(relocated, object_id)  # memoised: no planner run
+        return self._charged(key, lambda: self.scene.clear_zone(relocated, object_id))
+
+    def _charged(self, key: SetKey, ask: Callable[[], _T]) -> _T:
+        """``ask()``; a new ``key`` counts one planner run and its cost, past a budget it raises
+        :class:`BudgetExceededError` (``'planner_runs'`` or ``'time'``) instead.
+        """
+        if key in self._seen:
+            return ask()  # memoised: no planner run
+        if self.planner_runs >= self.max_runs:
+            raise BudgetExceededError('planner_runs')
+        if time.monotonic() > self.deadline:
+            raise BudgetExceededError('time')
+        answer = ask()
+        self._seen.add(key)
+        self.planner_runs += 1
+        self.charged_s += self.scene.cost_s[key]
+        return answer
 
 
 def build_scene(task: ScaleTask) -> tuple[tuple[str, ...], str, Any]:
