@@ -18,6 +18,7 @@ H-EG-SET (ours) additionally runs :meth:`QTree.sweep` before extracting the sequ
 from __future__ import annotations
 
 import time
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -195,7 +196,7 @@ def first_optimal_episode(history: list[EpisodeStats], optimal_level: int) -> in
 EpisodeCallback = Callable[[EpisodeStats], bool]
 
 
-class TrainerBase:
+class TrainerBase(ABC):
     """What every trainer holds: its configuration, its oracle and one statistics per episode.
 
     The constructor keeps ``config`` and ``oracle``, starts an empty ``history`` and hands the
@@ -220,9 +221,9 @@ class TrainerBase:
         self.history: list[EpisodeStats] = []
         self._build(movable_ids, target_id)
 
+    @abstractmethod
     def _build(self, movable_ids: tuple[str, ...], target_id: str) -> None:
         """Build the subclass's state (called once, by the constructor)."""
-        raise NotImplementedError
 
     @property
     def episode(self) -> int:
