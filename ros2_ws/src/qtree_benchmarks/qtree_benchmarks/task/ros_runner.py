@@ -100,10 +100,16 @@ def _record(task: Task, result, stats: list) -> dict:
     )
     return training_record(
         task,
-        result,
         policy=task.policy,
+        sequence=result.sequence,
+        extraction=result.extraction,
+        episodes=result.episodes,
+        mp_calls=result.mp_calls,
+        planner_runs_fresh=result.planner_runs,
         planner_runs_real=result.planner_runs,
         first_optimal_episode=first,
+        first_learned_level_episode=result.first_learned_level_episode,
+        converged=result.converged,
         stop_reason=result.message,
         wall_time_s=result.training_time,
         q_bar_curve=[[s.episode, s.q_bar] for s in stats[:: max(1, len(stats) // 200)]],

@@ -143,48 +143,41 @@ def run_task(task: Task) -> dict:
     result = train((*obstacles, target), target, oracle, config)
     q_bar = [s.q_bar for s in result.history]
     step = max(1, len(q_bar) // 200)
-    curve = [[i + 1, q_bar[i]] for i in range(0, len(q_bar), step)] if task.keep_curve else []
     return training_record(
-        task, result, planner_runs_real=shared.planner_runs - runs_before, q_bar_curve=curve
+        task,
+        policy=result.policy,
+        sequence=result.sequence,
+        extraction=result.extraction,
+        episodes=result.episodes,
+        mp_calls=result.mp_calls,
+        planner_runs_fresh=result.planner_runs,
+        planner_runs_real=shared.planner_runs - runs_before,
+        first_optimal_episode=result.first_optimal_episode,
+        first_learned_level_episode=result.first_learned_level_episode,
+        converged=result.converged,
+        stop_reason=result.stop_reason,
+        wall_time_s=result.wall_time_s,
+        q_bar_curve=[[i + 1, q_bar[i]] for i in range(0, len(q_bar), step)]
+        if task.keep_curve
+        else [],
     )
 
 
-RECORD_FIGURES = (  # the keys of a record after ``optimal``, in their order
-    'extraction',
-    'episodes',
-    'mp_calls',
-    'planner_runs_fresh',
-    'planner_runs_real',
-    'first_optimal_episode',
-    'first_learned_level_episode',
-    'converged',
-    'stop_reason',
-    'wall_time_s',
-    'q_bar_curve',
-)
-_RESULT_ATTRIBUTES = {'planner_runs_fresh': 'planner_runs'}  # record key -> result attribute
-
-
-def training_record(task: Task, result: Any, **given: Any) -> dict:
+def training_record(task: Task, *, policy: str, sequence: Any, **fields: Any) -> dict:
     """The JSON record of one training, the same keys in process and through ROS.
 
     Args:
         task: the training's task (scenario, variant, seed, optimal level).
-        result: the training's result (a ``TrainingResult`` or a ``RetrieveTarget`` result):
-            ``sequence`` (the target last; empty: none) and every figure of
-            :data:`RECORD_FIGURES` (and ``policy``) not in ``given`` are read from its
-            attribute of the same name (``planner_runs_fresh``: ``planner_runs``).
-        given: ``planner_runs_real``, ``q_bar_curve``, and the figures the result holds under
-            another name or not at all (through ROS: ``policy``, ``stop_reason``...).
+        policy: the policy that trained.
+        sequence: the extracted sequence (the target last; empty: none).
+        fields: the training's figures (``episodes``, ``mp_calls``, ``planner_runs_fresh``,
+            ``planner_runs_real``, ``first_optimal_episode``, ``first_learned_level_episode``,
+            ``converged``, ``stop_reason``, ``wall_time_s``, ``q_bar_curve``, ``extraction``).
     """
-
-    def figure(key: str) -> Any:
-        return given[key] if key in given else getattr(result, _RESULT_ATTRIBUTES.get(key, key))
-
-    variant, sequence = task.variant, result.sequence
+    variant = task.variant
     return {
         'scenario': task.scenario,
-        'policy': figure('policy'),
+        'policy': policy,
         'variant': variant.label,
         'hlrnd_rule': variant.hlrnd_rule,
         'epsilon_coin': variant.epsilon_coin,
@@ -193,7 +186,7 @@ def training_record(task: Task, result: Any, **given: Any) -> dict:
         'sequence': list(sequence),
         'level': len(sequence),
         'optimal': bool(sequence) and len(sequence) == task.optimal_level,  # none is never optimal
-        **{key: figure(key) for key in RECORD_FIGURES},
+        **fields,
     }
 
 
