@@ -15,13 +15,10 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile
 
 from jaco2_sim.disturbances import PARAMETER_FIELDS
 from jaco2_sim.simulation import EXPECTED_ERRORS, Simulation
 
-STATE_QOS = QoSProfile(depth=10)  # /joint_states: reliable, volatile
-TRAJECTORY_QOS = QoSProfile(depth=10)  # /joint_trajectory
 MAX_TRAJECTORY_POINTS_CAP = 100_000  # upper bound of max_trajectory_points (~0.9 s blocked)
 # (name, default, (description, min, max)); robot_description (read-only URDF) is added on top.
 PARAMETERS: list[tuple[str, Any, tuple[Any, ...]]] = [

@@ -11,7 +11,7 @@ from jaco2_description.model import urdf_text
 from qtree_msgs.msg import Scene
 from qtree_msgs.srv import AttachObject, ResetScene, SetScene
 from qtree_node_support.lifecycle import run_node
-from qtree_node_support.qos import LATCHED_QOS, SERVICE_QOS
+from qtree_node_support.qos import LATCHED_QOS, SERVICE_QOS, STATE_QOS, TRAJECTORY_QOS
 from qtree_node_support.text import quote
 from qtree_scene.message import parse_scene_msg
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
@@ -43,11 +43,11 @@ class Jaco2SimNode(Node):
         api.apply_parameters(self, self.core, [self.get_parameter('scene_events')])
         self.add_on_set_parameters_callback(lambda ps: api.check_parameters(self, self.core, ps))
         self.add_post_set_parameters_callback(self._apply_parameters)
-        self.state_pub = self.create_publisher(JointState, '/joint_states', api.STATE_QOS)
+        self.state_pub = self.create_publisher(JointState, '/joint_states', STATE_QOS)
         self.scene_pub = self.create_publisher(Scene, '/scene', LATCHED_QOS)
         self.urdf_pub = self.create_publisher(String, '/robot_description', LATCHED_QOS)
         self._motion = MutuallyExclusiveCallbackGroup()  # services never stop the motion (#18)
-        qos, group = api.TRAJECTORY_QOS, self._motion
+        qos, group = TRAJECTORY_QOS, self._motion
         self.create_subscription(JointTrajectory, '/joint_trajectory', self._on_raw_trajectory,
                                  qos, raw=True, callback_group=group)  # fmt: skip
         self.create_subscription(JointState, p('command_topic'), self._on_command, qos,

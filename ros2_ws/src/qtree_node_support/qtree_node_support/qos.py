@@ -25,6 +25,10 @@ LATCHED_QOS = QoSProfile(  # /scene, /qtree, /robot_description: a late joiner g
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )
+# Streams (reliable, volatile): a subscriber needs the samples from the time it matched on.
+STATE_QOS = QoSProfile(depth=10)  # /joint_states and the closed loop's joint commands
+TRAJECTORY_QOS = QoSProfile(depth=10)  # /joint_trajectory: the sim follows the newest
+STATS_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # episode bursts
 
 
 def action_server_qos() -> dict[str, Any]:

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from jaco2_description.model import ARM_JOINTS
 from qtree_msgs.msg import ReplanEvent
 from qtree_msgs.srv import RelocateObject
-from qtree_node_support.qos import SERVICE_QOS
+from qtree_node_support.qos import SERVICE_QOS, TRAJECTORY_QOS
 from qtree_node_support.text import quote
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.node import Node
@@ -66,7 +66,9 @@ class SequenceExecution:
         """
         self._client = client
         self._canceled = threading.Event()
-        self._stop_pub = node.create_publisher(JointTrajectory, '/joint_trajectory', 10)
+        self._stop_pub = node.create_publisher(
+            JointTrajectory, '/joint_trajectory', TRAJECTORY_QOS
+        )
         self._replan_pub = node.create_publisher(ReplanEvent, '/task_planner/replans', 10)
         self._clock = node.get_clock()
         self._cancel_client = node.create_client(

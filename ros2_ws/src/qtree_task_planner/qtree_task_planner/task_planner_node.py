@@ -15,12 +15,11 @@ from qtree_msgs.msg import QTree as QTreeMsg
 from qtree_msgs.msg import Scene, TrainingStats
 from qtree_msgs.srv import RelocateObject
 from qtree_node_support.lifecycle import run_node
-from qtree_node_support.qos import LATCHED_QOS, SERVICE_QOS, action_server_qos
+from qtree_node_support.qos import LATCHED_QOS, SERVICE_QOS, STATS_QOS, action_server_qos
 from rclpy.action import ActionServer, CancelResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from qtree_task_planner.conversions import result_msg, stats_msg, tree_msg
 from qtree_task_planner.goal_run import (
@@ -33,7 +32,6 @@ from qtree_task_planner.goal_run import (
 )
 from qtree_task_planner.sequence_execution import SequenceExecution
 
-STATS_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # bursts of episodes
 Result = RetrieveTarget.Result
 
 

@@ -114,7 +114,8 @@ def same_order(old: Scenario, new: Scenario, changed: set[str]) -> bool:
 
 def tallest_movable(planner: Any, key: CacheKey) -> float | None:
     """Top [m] of the tallest non-static body standing while ``key`` is planned (it sets the
-    height of the carry, :meth:`.planner.MotionPlanner._sample_path`), None without one.
+    height of the carry, :meth:`.geometric_planner.GeometricPlanner._sample_path`), None
+    without one.
     """
     relocated, object_id = key
     standing = planner.planning_scene(object_id, relocated)

@@ -39,7 +39,7 @@ from stpik_motion_planner.collision import SceneWorld
 from stpik_motion_planner.result import PlanResult, Reason, ReasonFamily, reason_family
 
 if TYPE_CHECKING:
-    from stpik_motion_planner.planner import MotionPlanner
+    from stpik_motion_planner.geometric_planner import GeometricPlanner
 
 HIT_MARGIN_M = 0.01  # an object closer than this to the swept arm blocks the approach [m]
 NEAR_MARGIN_M = 0.05  # fallback: objects this close to the sweep deflect the arm [m]
@@ -92,14 +92,15 @@ class Blockers:
 
 
 class BlockerFinder:
-    """Blockers for the requests of one :class:`~stpik_motion_planner.planner.MotionPlanner`.
+    """Blockers for the requests of one :class:`~stpik_motion_planner.planner.MotionPlanner`,
+    swept with its :class:`~.geometric_planner.GeometricPlanner` (no cache).
 
     Attributes:
         sweeps: per object id, one :class:`Sweep` per candidate approach (lazily filled).
         time_s: total wall time spent computing sweeps [s].
     """
 
-    def __init__(self, planner: MotionPlanner) -> None:
+    def __init__(self, planner: GeometricPlanner) -> None:
         self.planner = planner
         self.sweeps: dict[str, list[Sweep]] = {}
         self.partial: dict[str, list[Sweep]] = {}  # objects whose sweeps the deadline cut short

@@ -25,7 +25,7 @@ import fcl
 import numpy as np
 import pinocchio as pin
 
-from stpik_motion_planner.collision import SceneWorld
+from stpik_motion_planner.collision import ProbeSet, SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import PlanningTimeout
 from stpik_motion_planner.grasps import side_rotation
@@ -141,6 +141,8 @@ class CartesianSampler:
         scene: every body standing (the object being moved excluded), statics included.
         movable: the non-static bodies, probed by the free-space ball.
         hand: the open-hand geometry (:class:`~.hand_model.HandModel`).
+        swept_probes: the parts of ``hand.swept`` as probes (the approach corridor).
+        at_pose_probes: the parts of ``hand.at_pose`` as probes (poses of known orientation).
         validity_checks: free-space probe queries so far [-].
     """
 
@@ -153,6 +155,10 @@ class CartesianSampler:
         self.hand = hand
         self._ball_geometry = fcl.Sphere(hand.ball_radius)
         self._ball = fcl.CollisionObject(self._ball_geometry, fcl.Transform())
+        # The hand parts as probes placed together (:meth:`_hits`); this sampler's own fcl
+        # objects (placed per pose), so samplers of other threads do not share them.
+        self.swept_probes = ProbeSet(hand.swept, hand.swept_spheres)
+        self.at_pose_probes = ProbeSet(hand.at_pose, hand.at_pose_spheres)
         self.validity_checks = 0
 
     def point_free(self, point: np.ndarray) -> bool:
@@ -171,36 +177,37 @@ class CartesianSampler:
         return all(self.point_free(a + (b - a) * t) for t in np.linspace(0.0, 1.0, n + 1))
 
     def _hits(
-        self,
-        parts: dict[str, fcl.Convex],
-        spheres: dict[str, tuple[np.ndarray, float]],
-        pose: pin.SE3,
-        movable_margin_m: float | None = None,
+        self, probes: ProbeSet, pose: pin.SE3, movable_margin_m: float | None = None
     ) -> list[str]:
         """Ids of the scene bodies closer than the margin to a hand part placed at ``pose``.
 
-        ``spheres``: per part, a bounding sphere in the EE frame (centre [m] (3,), radius [m]),
-        for the cull of :meth:`.collision.SceneWorld.probe_hits`. ``movable_margin_m``: a wider
-        margin [m] for the non-static bodies (the statics keep ``obstacle_min_distance_m``).
+        ``probes``: the hand parts (:attr:`swept_probes` or :attr:`at_pose_probes`).
+        ``movable_margin_m``: a wider margin [m] for the non-static bodies (the statics keep
+        ``obstacle_min_distance_m``).
+
+        One cull per world for all the parts (:meth:`.collision.SceneWorld.cull_probes`), then
+        per part the scene's and the movable bodies' ``fcl.distance`` calls and logs
+        (:meth:`~.collision.SceneWorld.probe_result`), in the order of one
+        :meth:`~.collision.SceneWorld.probe_hits` per part and world: the same hits and the
+        same :class:`~.collision.SceneQuery` logs.
         """
         rotation, translation = pose.rotation, pose.translation
         transform = fcl.Transform(rotation, translation)
+        centres = probes.place(rotation, translation, transform)
         margin = self.config.obstacle_min_distance_m
+        worlds = [(self.scene, self.scene.cull_probes(centres, probes.radii, margin))]
+        if movable_margin_m is not None and movable_margin_m > margin:
+            cull = self.movable.cull_probes(centres, probes.radii, movable_margin_m)
+            worlds.append((self.movable, cull))
         hit: list[str] = []
-        for name, geometry in parts.items():
-            body = fcl.CollisionObject(geometry, transform)
-            centre, radius = spheres[name]
-            world_centre = rotation @ centre + translation
-            hit += self.scene.probe_hits(body, world_centre, radius, margin, geometry)
-            if movable_margin_m is not None and movable_margin_m > margin:
-                wider = movable_margin_m
-                hit += self.movable.probe_hits(body, world_centre, radius, wider, geometry)
+        for i, (body, geometry) in enumerate(zip(probes.bodies, probes.geometries, strict=True)):
+            for world, cull in worlds:
+                hit += world.probe_result(cull, i, body, (geometry, transform))
         return sorted(set(hit))
 
     def poses_free(self, poses: list[pin.SE3]) -> bool:
         """True when every hand body clears the scene (margin included) at every EE pose."""
-        hand = self.hand
-        return not any(self._hits(hand.at_pose, hand.at_pose_spheres, p) for p in poses)
+        return not any(self._hits(self.at_pose_probes, p) for p in poses)
 
     def corridor_blockers(self, grasp: pin.SE3) -> list[str]:
         """Ids of the bodies in the hand's approach corridor (pre-grasp → grasp), sorted.
@@ -225,7 +232,7 @@ class CartesianSampler:
         # 132 feasible, 9 of them by another approach). At the full 25 mm 132 feasible fell to
         # 59: STPIK does track corridors inside the activation band, within its tolerance.
         activation = self.config.obstacle_activation_m - self.config.position_tolerance_m
-        return self._hits(self.hand.swept, self.hand.swept_spheres, grasp, activation)
+        return self._hits(self.swept_probes, grasp, activation)
 
     def corridor_free(self, grasp: pin.SE3) -> bool:
         """The hand's approach corridor (pre-grasp → grasp, wrist link included) is clear."""

@@ -37,7 +37,7 @@ import pinocchio as pin
 from jaco2_description.model import ARM_JOINTS, EE_FRAME, Jaco2Model
 from qtree_scene.scene import ObjectSpec
 
-from stpik_motion_planner.collision import SceneWorld
+from stpik_motion_planner.collision import Proximity, SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import MotionPlannerError
 from stpik_motion_planner.execution_config import ExecutionConfig
@@ -123,6 +123,16 @@ def measured_q(names: Sequence[str], positions: Sequence[float]) -> np.ndarray:
     if not np.all(np.isfinite(q)):
         raise ExecutionStopped('joint_state', f'joint state has non-finite arm angles {q}')
     return q
+
+
+def _set_lost(task: str, pair: Proximity, margin_m: float) -> str:
+    """Why ``task`` (``'self_hit'`` or ``'obstacles'``) cannot hold its set at ``pair``."""
+    gap = f'{pair.distance * 1e3:.1f} mm'
+    if task == 'self_hit':
+        where = f'self-hit task cannot hold its set: {pair.name_a} and {pair.name_b} {gap} apart'
+    else:
+        where = f'obstacle task cannot hold its set: {pair.name_a} {gap} from {pair.name_b!r}'
+    return f'{where} (margin {margin_m * 1e3:.1f} mm)'
 
 
 class PlannedMotion:
@@ -456,22 +466,13 @@ class ClosedLoopController:
                 f'[{self.stpik.lower[j]:.3f}, {self.stpik.upper[j]:.3f}]',
             )
         tolerance = self.config.margin_tolerance_m
-        for p in k.self_pairs:
-            if p.distance <= m.self_min_distance_m - tolerance:
-                raise ExecutionStopped(
-                    'self_hit',
-                    f'self-hit task cannot hold its set: {p.name_a} and {p.name_b} '
-                    f'{p.distance * 1e3:.1f} mm apart '
-                    f'(margin {m.self_min_distance_m * 1e3:.1f} mm)',
-                )
-        for p in k.scene_pairs:
-            if p.distance <= m.obstacle_min_distance_m - tolerance:
-                raise ExecutionStopped(
-                    'obstacles',
-                    f'obstacle task cannot hold its set: {p.name_a} '
-                    f'{p.distance * 1e3:.1f} mm from {p.name_b!r} '
-                    f'(margin {m.obstacle_min_distance_m * 1e3:.1f} mm)',
-                )
+        for task, pairs, margin in (
+            ('self_hit', k.self_pairs, m.self_min_distance_m),
+            ('obstacles', k.scene_pairs, m.obstacle_min_distance_m),
+        ):
+            lost = next((p for p in pairs if p.distance <= margin - tolerance), None)
+            if lost is not None:
+                raise ExecutionStopped(task, _set_lost(task, lost, margin))
 
     def _check_reference(self, q_ref: np.ndarray) -> None:
         """Stop before streaming a reference that takes the arm to ``q_ref`` [rad] (7,) (the

@@ -29,7 +29,6 @@ answered ``GRASP_FAILED`` the same way. If the way back is blocked too, ``EXECUT
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import threading
 import time
@@ -39,6 +38,7 @@ import pinocchio as pin
 from jaco2_description.model import ARM_JOINTS, Jaco2Model
 from qtree_msgs.msg import ObjectState, Scene, TrackingState
 from qtree_node_support.parameters import range_descriptor
+from qtree_node_support.qos import STATE_QOS
 from qtree_scene.changes import changes_under_relocation, clutter_objects, standing_objects
 from qtree_scene.message import scenario_from_msg
 from rcl_interfaces.msg import SetParametersResult
@@ -91,7 +91,7 @@ class Execution(TrajectoryExecution):
         self._config()  # refuse bad start-up values at once
         self.robot = Jaco2Model()
         self._command_pub = node.create_publisher(
-            JointState, node.get_parameter('command_topic').value, 10
+            JointState, node.get_parameter('command_topic').value, STATE_QOS
         )
         self._tracking_pub = node.create_publisher(TrackingState, '/motion_planner/tracking', 10)
         self._timer_group = MutuallyExclusiveCallbackGroup()
@@ -159,7 +159,7 @@ class Execution(TrajectoryExecution):
         failure, reason = self._closed_loop(result, object_id)
         if not failure:
             return result
-        return dataclasses.replace(result, feasible=False, reason=reason, message=failure)
+        return result.failed(reason, failure)
 
     def _closed_loop(self, result: PlanResult, object_id: str) -> tuple[str, Reason]:
         """Run every segment; ('', SUCCESS) when executed, else (why not, reason)."""

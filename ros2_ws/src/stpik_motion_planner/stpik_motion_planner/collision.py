@@ -1,19 +1,22 @@
 """python-fcl worlds: the scene objects and the arm's links, with distance queries.
 
 No ROS import. A probe against the scene (:meth:`SceneWorld.clearance`) goes through
-``fcl.DynamicAABBTreeCollisionManager``. The arm's queries (:class:`RobotBodies`) bound every
-pair's distance from below in numpy first (bounding spheres, a box around each scene object) and
-call ``fcl.distance`` only on the pairs that bound cannot rule out, so they return exactly the
-pairs a query of every pair would, and a query where nothing is near makes no fcl call.
+``fcl.DynamicAABBTreeCollisionManager``; the sampler's probes (:meth:`SceneWorld.probe_hits`,
+and the hand's parts together: :class:`ProbeSet`, :meth:`SceneWorld.cull_probes`) are culled
+first by the lower bound of :func:`.kernels.scene_candidates`. The arm's queries
+(:class:`RobotBodies`) bound every pair's distance from below in numpy first (bounding spheres,
+a box around each scene object) and call ``fcl.distance`` only on the pairs that bound cannot
+rule out, so they return exactly the pairs a query of every pair would, and a query where
+nothing is near makes no fcl call.
 """
 
 from __future__ import annotations
 
 import math
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, NamedTuple, Protocol
 
 import fcl
 import numpy as np
@@ -27,7 +30,20 @@ _NO_DISTANCE = sys.float_info.max  # min_distance of an empty fcl.DistanceResult
 # Added to a probe's bounding radius before the cull of SceneWorld.probe_hits, so that rounding
 # of the probe's placement can only let more objects through to fcl.distance [m].
 PROBE_SLACK_M = 1e-6
-_ONE_BODY = np.zeros(1, dtype=np.int64)  # the probe: body 0 of scene_candidates
+# The result argument of the fcl.distance calls whose return value only is read: fcl.distance
+# updates a result (nearest points, geometries converted to Python) only when its min_distance
+# is larger than the pair's, never from -inf (#28: that update cost as much as a far pair).
+_UNREAD = fcl.DistanceResult(-math.inf)
+_PROBE_INDEX: dict[int, np.ndarray] = {}  # count -> the body indices 0 … count − 1 of a cull
+
+
+def _probe_index(count: int) -> np.ndarray:
+    """Indices 0 … ``count`` − 1 (int64, (count,)): the probes of a cull as bodies."""
+    index = _PROBE_INDEX.get(count)
+    if index is None:
+        index = _PROBE_INDEX.setdefault(count, np.arange(count, dtype=np.int64))
+    return index
+
 
 # Links of the 7-DoF Jaco² (short names) in the groups whose cross pairs are all non-adjacent.
 _PROXIMAL = ('link_base', 'link_1', 'link_2', 'link_3')
@@ -124,6 +140,7 @@ class SceneWorld:
         self.sin = np.array([math.sin(obj.yaw) for obj in specs], dtype=float)
         self.half = np.array([cull_half_extents(obj) for obj in specs], dtype=float).reshape(-1, 3)
         self.bodies = self._keep
+        self._zero_rows = np.zeros(len(specs), dtype=np.int64)  # a probe query's rows (body 0)
 
     @property
     def names(self) -> dict[int, str]:
@@ -160,13 +177,58 @@ class SceneWorld:
         :func:`.kernels.scene_candidates` (the sphere against a box around each object) rules
         the far objects out, the others get the ``fcl.distance(object, probe)`` the manager's
         callback computes, in the manager's argument order, so each distance is the same.
+        One probe of :meth:`cull_probes` then :meth:`probe_result`.
         """
         centres = np.ascontiguousarray(centre, dtype=float).reshape(1, 3)
         radii = np.array([radius + PROBE_SLACK_M])
-        rows, objects = scene_candidates(
+        _, objects = self._cull(centres, radii, threshold)
+        probe = None if geometry is None or not self.recorders else (geometry, body.getTransform())
+        return self._probe(centres, radii, 0, threshold, objects.tolist(), body, probe)
+
+    def cull_probes(self, centres: np.ndarray, radii: np.ndarray, threshold: float) -> ProbeCull:
+        """The cull of :meth:`probe_hits` for P probes in one :func:`.kernels.scene_candidates`
+        call (#28: the hand's parts, one call per pose instead of one per part).
+
+        The kernel bounds each (probe, object) pair on its own, so probe i's candidates are the
+        objects, in the same order, that a cull of probe i alone lets through.
+
+        Args:
+            centres: the probes' bounding-sphere centres in the world frame [m] (P, 3),
+                C-contiguous.
+            radii: their radii, :data:`PROBE_SLACK_M` included [m] (P,).
+            threshold: the probes' distance threshold [m].
+        """
+        rows, objects = self._cull(centres, radii, threshold)
+        candidates: list[list[int]] = [[] for _ in range(len(radii))]
+        for row, obj in zip(rows.tolist(), objects.tolist(), strict=True):
+            candidates[row].append(obj)
+        return ProbeCull(centres, radii, threshold, candidates)
+
+    def probe_result(
+        self,
+        cull: ProbeCull,
+        index: int,
+        body: fcl.CollisionObject,
+        probe: tuple[fcl.CollisionGeometry, fcl.Transform] | None,
+    ) -> list[str]:
+        """Ids of the objects closer than ``cull.threshold`` [m] to probe ``index`` of ``cull``
+        (:meth:`cull_probes`), ``body`` (placed): what :meth:`probe_hits` of that probe alone
+        gives, and logs the same query, with ``probe`` (its geometry and pose) if given: the log
+        keeps the pose object itself, so the caller must not change it afterwards.
+        """
+        objects = cull.objects[index]
+        return self._probe(cull.centres, cull.radii, index, cull.threshold, objects, body, probe)
+
+    def _cull(
+        self, centres: np.ndarray, radii: np.ndarray, threshold: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`.kernels.scene_candidates` of probes ``centres`` [m] (P, 3), ``radii`` [m]
+        (P,) against every object (exclusive ``threshold`` [m]): (probe rows, object indices).
+        """
+        return scene_candidates(
             centres,
             radii,
-            _ONE_BODY,
+            _probe_index(len(radii)),
             self.centres,
             self.cos,
             self.sin,
@@ -174,28 +236,101 @@ class SceneWorld:
             threshold,
             False,
         )
-        hits = []
-        found = []
-        for o in objects:
-            result = fcl.DistanceResult()
-            if fcl.distance(self._keep[o], body, _REQUEST, result) < threshold:
-                hits.append(self.ids[o])
-                found.append(self.specs[o])
+
+    def _probe(
+        self,
+        centres: np.ndarray,
+        radii: np.ndarray,
+        index: int,
+        threshold: float,
+        objects: list[int],
+        body: fcl.CollisionObject,
+        probe: tuple[fcl.CollisionGeometry, fcl.Transform] | None,
+    ) -> list[str]:
+        """The narrow phase of probe ``index`` of a cull (centres [m] (P, 3), radii [m] (P,)):
+        ``fcl.distance(object, body)`` of each candidate of ``objects``, in their order, in the
+        manager's argument order; logs the query (one body: row ``index`` of the cull) to every
+        recorder. Returns the ids of the objects closer than ``threshold`` [m].
+        """
+        keep = self._keep
+        near = [o for o in objects if fcl.distance(keep[o], body, _REQUEST, _UNREAD) < threshold]
         if self.recorders:
-            probe = None if geometry is None else (geometry, body.getTransform())
+            specs = self.specs
             query = SceneQuery(
-                centres,
-                radii,
+                centres[index : index + 1],
+                radii[index : index + 1],
                 threshold,
                 False,
-                rows,
-                tuple(self.specs[o] for o in objects),
-                hits=tuple(found),
+                self._zero_rows[: len(objects)],
+                tuple([specs[o] for o in objects]),
+                hits=tuple([specs[o] for o in near]),
                 probe=probe,
             )
             for log in self.recorders:
                 log.append(query)
-        return hits
+        ids = self.ids
+        return [ids[o] for o in near]
+
+
+class ProbeCull(NamedTuple):
+    """The cull of P probes against one :class:`SceneWorld` (:meth:`SceneWorld.cull_probes`).
+
+    Attributes:
+        centres: the probes' bounding-sphere centres [m] (P, 3).
+        radii: their radii, :data:`PROBE_SLACK_M` included [m] (P,).
+        threshold: the probes' distance threshold [m].
+        objects: per probe, the indices of the objects its cull lets through, ascending.
+    """
+
+    centres: np.ndarray
+    radii: np.ndarray
+    threshold: float
+    objects: list[list[int]]
+
+
+class ProbeSet:
+    """Rigid probes moved together (the hand's parts at one EE pose), each a persistent fcl
+    object with a bounding sphere in the probes' own frame, for :meth:`SceneWorld.cull_probes`.
+
+    Attributes:
+        names: the probes' names, in the order of the mapping given.
+        geometries: their fcl geometries (P).
+        bodies: their fcl objects, placed by :meth:`place` (P).
+        radii: their bounding radii plus :data:`PROBE_SLACK_M` [m] (P,).
+    """
+
+    def __init__(
+        self,
+        geometries: Mapping[str, fcl.CollisionGeometry],
+        spheres: Mapping[str, tuple[np.ndarray, float]],
+    ) -> None:
+        """Args:
+        geometries: name -> geometry in the probes' frame.
+        spheres: name -> bounding sphere in that frame: centre [m] (3,), radius [m].
+        """
+        self.names = list(geometries)
+        self.geometries = [geometries[name] for name in self.names]
+        self.bodies = [fcl.CollisionObject(g, fcl.Transform()) for g in self.geometries]
+        self._centres = [spheres[name][0] for name in self.names]
+        self.radii = np.array([spheres[name][1] + PROBE_SLACK_M for name in self.names])
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def place(
+        self, rotation: np.ndarray, translation: np.ndarray, transform: fcl.Transform
+    ) -> np.ndarray:
+        """Place every probe at the pose ``transform`` (= ``rotation`` (3, 3), ``translation``
+        [m] (3,)); returns the bounding spheres' world centres [m] (P, 3).
+
+        Each centre is ``rotation @ centre + translation`` of its own (3,) centre, the
+        arithmetic of a probe placed alone (so the culls see the same numbers).
+        """
+        centres = np.empty((len(self.names), 3))
+        for i, (body, centre) in enumerate(zip(self.bodies, self._centres, strict=True)):
+            body.setTransform(transform)
+            centres[i] = rotation @ centre + translation
+        return centres
 
 
 def probe_distance(obj: ObjectSpec, geometry: fcl.CollisionGeometry, pose: fcl.Transform) -> float:
@@ -203,7 +338,7 @@ def probe_distance(obj: ObjectSpec, geometry: fcl.CollisionGeometry, pose: fcl.T
     ``geometry`` at ``pose``: the call :meth:`SceneWorld.probe_hits` makes.
     """
     body = fcl.CollisionObject(object_geometry(obj), object_transform(obj))
-    return fcl.distance(body, fcl.CollisionObject(geometry, pose), _REQUEST, fcl.DistanceResult())
+    return fcl.distance(body, fcl.CollisionObject(geometry, pose), _REQUEST, _UNREAD)
 
 
 def cull_half_extents(obj: ObjectSpec) -> tuple[float, float, float]:

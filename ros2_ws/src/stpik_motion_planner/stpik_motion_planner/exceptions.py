@@ -86,28 +86,36 @@ class JointLimitViolated(MotionPlannerError):  # noqa: N818
         )
 
 
-class SelfCollision(MotionPlannerError):  # noqa: N818
+class TooClose(MotionPlannerError):  # noqa: N818
+    """Two bodies came closer than a margin: the base of the collision errors.
+
+    Attributes:
+        bodies: the two bodies (link names, or a link and an object id).
+        distance_m: their distance [m].
+    """
+
+    def __init__(self, bodies: tuple[str, str], distance_m: float, what: str) -> None:
+        self.bodies = bodies
+        self.distance_m = distance_m
+        super().__init__(f'{what}: distance {distance_m * 1000:.1f} mm')
+
+
+class SelfCollision(TooClose):
     """Two links of the arm came closer than the self-hit margin."""
 
     reason = Reason.SELF_COLLISION
 
     def __init__(self, link_a: str, link_b: str, distance_m: float) -> None:
-        self.link_a = link_a
-        self.link_b = link_b
-        self.distance_m = distance_m
-        super().__init__(f'self-hit {link_a} / {link_b}: distance {distance_m * 1000:.1f} mm')
+        super().__init__((link_a, link_b), distance_m, f'self-hit {link_a} / {link_b}')
 
 
-class SceneCollision(MotionPlannerError):  # noqa: N818
+class SceneCollision(TooClose):
     """A link (or the grasped object) came closer to a scene object than the safety margin."""
 
     reason = Reason.SCENE_COLLISION
 
     def __init__(self, link: str, object_id: str, distance_m: float) -> None:
-        self.link = link
-        self.object_id = object_id
-        self.distance_m = distance_m
-        super().__init__(f'{link} hits {object_id!r}: distance {distance_m * 1000:.1f} mm')
+        super().__init__((link, object_id), distance_m, f'{link} hits {object_id!r}')
 
 
 class VerificationFailed(MotionPlannerError):  # noqa: N818

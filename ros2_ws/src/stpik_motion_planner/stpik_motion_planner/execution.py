@@ -22,7 +22,6 @@ stays ``EXECUTION_FAILED``.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import threading
 import time
@@ -31,11 +30,10 @@ import numpy as np
 from jaco2_description.model import ARM_JOINTS
 from qtree_msgs.msg import ObjectState
 from qtree_msgs.srv import AttachObject
-from qtree_node_support.qos import SERVICE_QOS
+from qtree_node_support.qos import SERVICE_QOS, STATE_QOS, TRAJECTORY_QOS
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
-from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
@@ -46,7 +44,6 @@ from stpik_motion_planner.scene_checks import format_id
 from stpik_motion_planner.state_watch import SilenceWatch, arrived
 from stpik_motion_planner.undo import UNDONE, reversed_samples
 
-STATE_QOS = QoSProfile(depth=10)
 ENDPOINTS = {  # read-only parameters of the node: name -> (default, description)
     'trajectory_topic': (
         '/joint_trajectory',
@@ -95,7 +92,7 @@ class TrajectoryExecution:
         # busy (rclpy's Python executor), which slowed planning 10-50x under load.
         self._state_group = MutuallyExclusiveCallbackGroup()
         self._trajectory_pub = node.create_publisher(
-            JointTrajectory, self.endpoints['trajectory_topic'], 10
+            JointTrajectory, self.endpoints['trajectory_topic'], TRAJECTORY_QOS
         )
         self._canceled = threading.Event()  # set by ~/cancel_execution, cleared by follow()
         self._running = False
@@ -174,11 +171,8 @@ class TrajectoryExecution:
                     self._trajectory_pub.publish(segment)
             failure = self._reach(result.joint_trajectory[end], times[-1])
             if failure:
-                return dataclasses.replace(
-                    result,
-                    feasible=False,
-                    reason=Reason.EXECUTION_FAILED,
-                    message=f'the sim did not reach sample {end}: {failure}',
+                return result.failed(
+                    Reason.EXECUTION_FAILED, f'the sim did not reach sample {end}: {failure}'
                 )
             if attach is None or self._canceled.is_set():
                 continue
@@ -186,11 +180,9 @@ class TrajectoryExecution:
             if outcome == REFUSED and attach:  # #32: undone, the caller may re-plan
                 return self._grasp_failed(result, object_id, text)
             if outcome:
-                return dataclasses.replace(
-                    result,
-                    feasible=False,
-                    reason=Reason.EXECUTION_FAILED,
-                    message=f'attach_object({format_id(object_id)}, {attach}) failed: {text}',
+                return result.failed(
+                    Reason.EXECUTION_FAILED,
+                    f'attach_object({format_id(object_id)}, {attach}) failed: {text}',
                 )
         return result
 
@@ -205,12 +197,8 @@ class TrajectoryExecution:
         failure = self._reach(joints[-1], times[-1])
         if failure:
             why = f'{why}; the arm could not go back: {failure}'
-            return dataclasses.replace(
-                result, feasible=False, reason=Reason.EXECUTION_FAILED, message=why
-            )
-        return dataclasses.replace(
-            result, feasible=False, reason=Reason.GRASP_FAILED, message=f'{why}; {UNDONE}'
-        )
+            return result.failed(Reason.EXECUTION_FAILED, why)
+        return result.failed(Reason.GRASP_FAILED, f'{why}; {UNDONE}')
 
     def _reach(self, q_goal: np.ndarray, duration: float) -> str:
         """Wait until the arm is at rest at ``q_goal`` [rad], ``duration`` [s] being the segment's

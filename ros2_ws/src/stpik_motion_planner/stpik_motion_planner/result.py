@@ -6,6 +6,7 @@ The :class:`Reason` values equal the constants of ``qtree_msgs/srv/RelocateObjec
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import KW_ONLY, dataclass, field
 from enum import IntEnum
 
@@ -107,3 +108,7 @@ class PlanResult:
     blocking_ids: tuple[str, ...] = ()
     blocked_by_immovable: bool = False
     approach_blockers: tuple[tuple[str, ...], ...] = ()
+
+    def failed(self, reason: Reason, message: str) -> PlanResult:
+        """This answer with its motion kept, turned infeasible with ``reason`` and why."""
+        return dataclasses.replace(self, feasible=False, reason=reason, message=message)

@@ -103,7 +103,7 @@ def test_blocker_sweeps_share_the_request_time_limit(make_cylinder, robot):
     # The sweeps are now fast enough to finish within any small limit on an idle machine (CI of
     # 19b121e): the first sweep is made to outlast the limit, so the deadline is hit whatever
     # the machine's speed.
-    plan = planner.plan
+    plan = planner.geometry.plan  # what the sweeps of .blockers call
     sweeps_planned: list[float] = []
 
     def slow_first_sweep(*args, **kwargs):
@@ -114,7 +114,7 @@ def test_blocker_sweeps_share_the_request_time_limit(make_cylinder, robot):
                 time.sleep(limit)
         return answer
 
-    planner.plan = slow_first_sweep
+    planner.geometry.plan = slow_first_sweep
     result = planner.check('T', [])
     assert len(sweeps_planned) == 1  # the deadline stopped the sweeps after the first one
     assert not result.feasible and not result.blocked_by_immovable
@@ -125,7 +125,7 @@ def test_blocker_sweeps_share_the_request_time_limit(make_cylinder, robot):
     assert 'T' not in planner.blockers.sweeps and 'T' in planner.blockers.partial
     assert planner.check('T', []).from_cache  # the feasibility answer is final
     swept = len(planner.blockers.partial['T'])
-    planner.plan = plan
+    planner.geometry.plan = plan
     planner.config = dataclasses.replace(planner.config, time_limit_s=30.0)
     again = planner.check('T', ['O2'])  # a new request about T goes on with the sweeps
     assert again.blocking_ids == ('O1',) and 'time limit' not in again.message

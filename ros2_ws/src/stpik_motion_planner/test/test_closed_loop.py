@@ -21,7 +21,7 @@ from stpik_motion_planner.closed_loop import (
     measured_q,
     segments,
 )
-from stpik_motion_planner.collision import SceneWorld
+from stpik_motion_planner.collision import Proximity, SceneWorld
 from stpik_motion_planner.exceptions import InvalidConfig
 from stpik_motion_planner.execution_config import ExecutionConfig, check_mode
 from stpik_motion_planner.planner import MotionPlanner
@@ -255,3 +255,31 @@ def test_a_noisy_measurement_still_settles_on_the_plan(plan):
     planner, result = plan
     errors = _closed_loop(planner, result, np.zeros(7), noise_rad=0.001)
     assert max(errors) < 0.0025  # true EE error at the end of each segment [m]
+
+
+def test_a_lost_set_stops_with_the_task_the_pair_and_the_margin(plan) -> None:
+    """#27: one check for both distance sets; the self-hit set is checked first."""
+    planner, result = plan
+    controller = ClosedLoopController(planner.robot, SceneWorld([]), planner.config)
+    q = result.joint_trajectory[0]
+    kin = controller.stpik.kinematics(q, SceneWorld([]))
+    m, slack = controller.margins, controller.config.margin_tolerance_m
+    inside = np.zeros(3)
+    self_hit = Proximity('link_3', 'link_6', m.self_min_distance_m - slack - 1e-4, inside, inside)
+    obstacle = Proximity('link_5', 'cup', m.obstacle_min_distance_m - slack, inside, inside)
+    kept = Proximity('link_5', 'cup', m.obstacle_min_distance_m - slack + 1e-4, inside, inside)
+    kin.self_pairs, kin.scene_pairs = [], [kept]
+    controller._check_sets(kin)  # within the measurement tolerance: no stop
+    kin.scene_pairs = [kept, obstacle]
+    with pytest.raises(ExecutionStopped) as stop:
+        controller._check_sets(kin)
+    assert stop.value.cause == 'obstacles'
+    margin_mm = m.obstacle_min_distance_m * 1e3
+    assert str(stop.value).endswith(
+        f"link_5 {obstacle.distance * 1e3:.1f} mm from 'cup' (margin {margin_mm:.1f} mm)"
+    )
+    kin.self_pairs = [self_hit]
+    with pytest.raises(ExecutionStopped) as stop:
+        controller._check_sets(kin)
+    assert stop.value.cause == 'self_hit'
+    assert 'link_3 and link_6' in str(stop.value) and 'apart' in str(stop.value)

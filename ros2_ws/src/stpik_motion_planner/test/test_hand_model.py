@@ -6,14 +6,15 @@ import fcl
 import numpy as np
 import pinocchio as pin
 import pytest
+from jaco2_description.model import HAND_OPENING_M
 from qtree_scene import placement
 from qtree_scene.scene import ObjectSpec
 from scipy.spatial import ConvexHull
 from stpik_motion_planner.cartesian_path import CartesianSampler, grasp_rotation
-from stpik_motion_planner.collision import SceneWorld
+from stpik_motion_planner.collision import ProbeSet, SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.hand_model import HandModel, finger_opening, open_hand_box
-from stpik_motion_planner.planner import HAND_OPENING_M, MotionPlanner
+from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import Reason
 
 
@@ -141,27 +142,25 @@ def test_grasp_keeps_the_palm_off_a_deep_box(hand, make_scenario, robot):
     box = ObjectSpec('T', 'target', 'box', (0.55, 0.1, 0.05), yaw=0.4, size=(0.06, 0.08, 0.10))
     planner = MotionPlanner(make_scenario(box), model=robot)
     yaw = -0.22
-    room = planner._palm_room(box, yaw)
+    room = planner.geometry._palm_room(box, yaw)
     assert room < -0.01
-    assert (
-        planner._palm_room(ObjectSpec('c', 'obstacle', 'cylinder', (0, 0, 0), 0.0, 0.03, 0.1), 0)
-        > 0
-    )
+    can = ObjectSpec('c', 'obstacle', 'cylinder', (0, 0, 0), 0.0, 0.03, 0.1)
+    assert planner.geometry._palm_room(can, 0) > 0
     sampler = _sampler(hand, make_scenario, box)
-    palm = {'palm': hand.at_pose['j2s7s300_link_7']}
-    spheres = {'palm': hand.at_pose_spheres['j2s7s300_link_7']}
+    palm = ProbeSet(
+        {'palm': hand.at_pose['j2s7s300_link_7']},
+        {'palm': hand.at_pose_spheres['j2s7s300_link_7']},
+    )
     axis = grasp_rotation(yaw)[:, 2]
     at_axis = _grasp(0.55, 0.1, 0.07, yaw)
     backed = pin.SE3(at_axis.rotation, at_axis.translation + room * axis)
-    assert sampler._hits(palm, spheres, at_axis) == [
-        'T'
-    ]  # the EE on the axis: palm inside the box
-    assert sampler._hits(palm, spheres, backed) == []
+    assert sampler._hits(palm, at_axis) == ['T']  # the EE on the axis: palm inside the box
+    assert sampler._hits(palm, backed) == []
 
 
 def test_grasp_height_constants_bound_the_hand(hand):
     """The grasp height keeps the real hand (|y| ≤ 0.047 m, EE y up) off the table."""
-    from stpik_motion_planner.planner import HAND_BELOW_EE_M, HAND_HALF_HEIGHT_M
+    from stpik_motion_planner.geometric_planner import HAND_BELOW_EE_M, HAND_HALF_HEIGHT_M
 
     lowest = max(float(np.max(np.abs(p[:, 1]))) for p in hand.parts.values())
     assert lowest <= HAND_HALF_HEIGHT_M <= HAND_BELOW_EE_M

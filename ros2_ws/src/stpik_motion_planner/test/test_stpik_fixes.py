@@ -11,7 +11,7 @@ from qtree_scene.scene import ObjectSpec
 from stpik_motion_planner.collision import SceneWorld, object_geometry, object_transform
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import IkNotConverged, JointLimitViolated, SceneCollision
-from stpik_motion_planner.planner import _outside_limit_band
+from stpik_motion_planner.geometric_planner import _outside_limit_band
 from stpik_motion_planner.stpik import READY, Stpik, solve_hierarchy
 from stpik_motion_planner.tasks import TaskRows
 
@@ -194,7 +194,8 @@ def test_fix11_every_leg_start_is_checked_against_the_limit_band(robot, monkeypa
     """#29 point 9: only the pre-grasp was refused inside the joint-limit activation band; the
     pose above the drop slot (a leg start too) was not checked."""
     from qtree_scene.scenario import load_scenario
-    from stpik_motion_planner import planner as planner_module
+    from stpik_motion_planner import geometric_planner as planner_module
+    from stpik_motion_planner.planner import MotionPlanner
 
     checked = []
     real = planner_module._outside_limit_band
@@ -204,7 +205,7 @@ def test_fix11_every_leg_start_is_checked_against_the_limit_band(robot, monkeypa
         return real(q, stpik, band, what)
 
     monkeypatch.setattr(planner_module, '_outside_limit_band', spy)
-    result = planner_module.MotionPlanner(load_scenario('s1'), model=robot).plan('O2', [])
+    result = MotionPlanner(load_scenario('s1'), model=robot).plan('O2', [])
     assert result.feasible, result.message
     assert {'pre-grasp', 'pose above the drop slot'} <= set(checked)
 
@@ -218,7 +219,7 @@ def test_fix12_the_placed_object_keeps_its_release_yaw(robot):
     obj = planner.scenario.object('O2')
     q = READY.copy()
     in_hand = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, 0.4), np.array([0.0, 0.0, 0.05]))
-    placed = planner._placed(obj, q, in_hand)
+    placed = planner.geometry._placed(obj, q, in_hand)
     world = robot.ee_pose(q) * in_hand
     assert np.allclose(placed.position, world.translation)
     expected = np.arctan2(world.rotation[1, 0], world.rotation[0, 0])
@@ -259,7 +260,7 @@ def test_nearest_turn_is_the_same_pose_within_pi(robot, turns):
 
 def test_fix14_the_planner_carry_ends_near_its_posture_reference(robot):
     """#29 point 4: the planner passed no posture reference and the test above only read an
-    attribute back. The STPIK-tracked carry (:meth:`MotionPlanner._upright_carry`) passes the
+    attribute back. The STPIK-tracked carry (:meth:`GeometricPlanner._upright_carry`) passes the
     pose above the drop slot as the reference: its posture task pulls the arm to that IK
     solution, not the lift's (measured: 0.063 rad from it; 0.207 rad with no reference)."""
     from qtree_scene.scenario import load_scenario
@@ -274,8 +275,8 @@ def test_fix14_the_planner_carry_ends_near_its_posture_reference(robot):
     planner.stpik.transit = lambda *args, **kwargs: np.array([tilted, q_above])
     ee = pin.SE3(robot.ee_pose(q_lift))
     in_hand = ee.actInv(pin.SE3(np.eye(3), ee.translation - np.r_[0.0, 0.0, 0.05]))
-    carry = planner._upright_carry(q_lift, q_above, in_hand, SceneWorld([]), np.inf)
-    assert np.degrees(planner._carried_tilts(carry, in_hand).max()) < 1.0
+    carry = planner.geometry._upright_carry(q_lift, q_above, in_hand, SceneWorld([]), np.inf)
+    assert np.degrees(planner.geometry._carried_tilts(carry, in_hand).max()) < 1.0
     assert np.linalg.norm(carry[-1] - q_above) < 0.1
 
 

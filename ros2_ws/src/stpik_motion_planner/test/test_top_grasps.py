@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+from jaco2_description.model import HAND_OPENING_M
 from qtree_scene.placement import TOP_PLACE_REACH_M, drop_slots, top_place_slots
 from qtree_scene.scene import ObjectSpec
 from stpik_motion_planner.config import PlannerConfig
@@ -25,7 +26,7 @@ from stpik_motion_planner.grasps import (
     top_yaws,
 )
 from stpik_motion_planner.hand_model import grasp_width
-from stpik_motion_planner.planner import HAND_OPENING_M, MotionPlanner
+from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import Reason
 from stpik_motion_planner.verifier import STOP_CLEARANCE_M, Carried, TrajectoryVerifier
 

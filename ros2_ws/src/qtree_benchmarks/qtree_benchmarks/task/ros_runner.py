@@ -1,7 +1,7 @@
 """The benchmark's trainings through the ROS graph: one sim + motion planner + task planner per
 scenario, goals sent one after the other (the planner's cache persists across them).
 
-Needs ``scripts/`` on ``sys.path`` (for ``orchestration``), as ``scripts/benchmark.py`` has. The
+The nodes start through :mod:`qtree_node_support.orchestration`. The
 action goal has no field for the readings, so only default-reading tasks can run here.
 """
 
