@@ -163,6 +163,8 @@ class Stpik:
         self._body_radius = np.array(
             [_bounding_radius(g.geometry) for g in self.geometry_model.geometryObjects]
         )
+        self._joints_attached = np.r_[self._body_joint, 7]  # with the carried object
+        self._radii_attached = np.r_[self._body_radius, 0.0]  # last: set by body_reach
         self._moved: dict[int, np.ndarray] = {}  # body_reach's (7, G) masks by body count
         self._body_index = {name: i for i, name in enumerate(robot.collision_links)}
         self._body_index['attached'] = len(robot.collision_links)
@@ -186,6 +188,10 @@ class Stpik:
         self.obstacles = ObstacleTask(c.obstacle_activation_m, c.set_gain)
         self.ee = EePoseTask(gain=c.ee_gain)
         self.posture = PostureTask(READY, c.posture_gain)  # reference: see ready_posture
+        # Buffers of :meth:`_solve_base` (EE rows 0-5, posture rows 6-12) and its constants.
+        self._base_jacobian = np.empty((13, 7))
+        self._base_error = np.empty(13)
+        self._base_starts = np.array([0, 6, 13], dtype=np.int64)
         self.collision_time = 0.0
         # Per STPIK step (:meth:`_step`): (solve + step bound, kinematics without collision,
         # collision) wall times [s], the latest STEP_TIMES_KEPT (benchmarks read and clear it).
@@ -255,7 +261,7 @@ class Stpik:
         c = self.config
         ee = self.ee.compute(k)
         posture = self.posture.compute(k)
-        dq = solve_hierarchy([ee, posture], 7, c.damping, c.singular_threshold)
+        dq = self._solve_base(ee, posture)
         candidates = []
         for task in self._may_activate(k):
             rows = task.compute(k)
@@ -271,13 +277,34 @@ class Stpik:
             if not added:
                 break
             levels = [
-                TaskRows(r.jacobian[m], r.error[m], tuple(np.asarray(r.labels)[m]))
+                TaskRows(
+                    r.jacobian[m],
+                    r.error[m],
+                    tuple(label for label, keep in zip(r.labels, m.tolist(), strict=True) if keep),
+                )
                 for _, r, m in candidates
                 if m.any()
             ]
             dq = solve_hierarchy([*levels, ee, posture], 7, c.damping, c.singular_threshold)
         active = [name for name, _, m in candidates if m.any()]
         return dq, active
+
+    def _solve_base(self, ee: TaskRows, posture: TaskRows) -> np.ndarray:
+        """``solve_hierarchy([ee, posture], 7, ...)`` without its per-call assembly (#28): the
+        rows are copied into buffers allocated once, with the level starts (0, 6, 13) fixed.
+        Same arrays into the same kernel, so the same step bit for bit.
+        """
+        c = self.config
+        jacobian, error = self._base_jacobian, self._base_error
+        if ee.jacobian.shape != (6, 7) or posture.jacobian.shape != (7, 7):
+            return solve_hierarchy([ee, posture], 7, c.damping, c.singular_threshold)
+        jacobian[:6] = ee.jacobian
+        jacobian[6:] = posture.jacobian
+        error[:6] = ee.error
+        error[6:] = posture.error
+        return solve_levels(
+            jacobian, error, self._base_starts, c.damping, c.singular_threshold, RANK_TOLERANCE
+        )
 
     def _may_activate(self, k: Kinematics) -> list:
         """The set-based tasks that can give a row at ``k`` (:meth:`SetBasedTask.may_activate`),
@@ -422,7 +449,7 @@ class Stpik:
         t0 = time.perf_counter()
         collision0 = self.collision_time
         dq, active = self.solve(k)
-        largest = float(np.max(np.abs(dq)))
+        largest = float(np.abs(dq).max())
         if largest > self.config.max_joint_step_rad:
             dq *= self.config.max_joint_step_rad / largest
         if bounded:
@@ -448,11 +475,15 @@ class Stpik:
         centres = self.bodies.centres[: len(joints)]  # (G, 3), placed by kinematics
         if self.bodies.attached is not None:
             centres = self.bodies.centres
-            joints = np.r_[joints, 7]
-            radii = np.r_[radii, self.bodies.attached_radius]
+            # np.r_[joints, 7] and np.r_[radii, attached radius], in buffers made once (#28)
+            joints, radii = self._joints_attached, self._radii_attached
+            radii[-1] = self.bodies.attached_radius
         offset = centres[None] - origins[:, None]  # (7, G, 3)
         along = np.einsum('jgk,jk->jg', offset, axes)
-        to_axis = np.linalg.norm(offset - along[..., None] * axes[:, None], axis=2)
+        # np.linalg.norm(·, axis=2) of a real array is sqrt(add.reduce(x * x, axis=2)): the
+        # same operations without its argument handling (#28)
+        off_axis = offset - along[..., None] * axes[:, None]
+        to_axis = np.sqrt(np.add.reduce(off_axis * off_axis, axis=2))
         distance = to_axis + radii[None]
         moved = self._moved.get(len(joints))
         if moved is None:  # depends on the bodies only (with / without the carried object)
@@ -473,31 +504,33 @@ class Stpik:
         step = np.abs(dq)
         body_motion = step @ reach  # (G,) [m]
         scale = 1.0
-
-        def limit(motion: float, allowed: float) -> None:
-            nonlocal scale
-            if motion > 1e-12:
-                scale = min(scale, max(allowed, 1e-4) / motion)
-
-        limit(
-            float(np.max(body_motion)),
-            LOOKAHEAD_M
-            + min(
+        # Each bound: scale = min(scale, max(allowed, 1e-4) / motion) where motion > 1e-12
+        # (one inline test per pair, no closure; Python floats, the values of float(numpy)).
+        motion = float(body_motion.max())
+        if motion > 1e-12:
+            allowed = LOOKAHEAD_M + min(
                 c.obstacle_activation_m - c.obstacle_min_distance_m,
                 c.self_activation_m - c.self_min_distance_m,
-            ),
-        )
+            )
+            scale = min(scale, max(allowed, 1e-4) / motion)
         index = self._body_index
-        for p in k.scene_pairs:
-            if p.distance >= c.obstacle_activation_m:
-                limit(float(body_motion[index[p.name_a]]), p.distance - c.obstacle_min_distance_m)
+        if k.scene_pairs:
+            motions = body_motion.tolist()
+            activation, margin = c.obstacle_activation_m, c.obstacle_min_distance_m
+            for p in k.scene_pairs:
+                if p.distance >= activation:
+                    motion = motions[index[p.name_a]]
+                    if motion > 1e-12:
+                        scale = min(scale, max(p.distance - margin, 1e-4) / motion)
+        activation, margin = c.self_activation_m, c.self_min_distance_m
         for p in k.self_pairs:
-            if p.distance >= c.self_activation_m:
+            if p.distance >= activation:
                 a, b = index[p.name_a], index[p.name_b]
                 if joints[a] > joints[b]:
                     a, b = b, a
-                relative = float(step[joints[a] :] @ reach[joints[a] :, b])
-                limit(relative, p.distance - c.self_min_distance_m)
+                motion = float(step[joints[a] :] @ reach[joints[a] :, b])
+                if motion > 1e-12:
+                    scale = min(scale, max(p.distance - margin, 1e-4) / motion)
         return scale
 
     def transit(

@@ -29,7 +29,8 @@ class JointLimitTask(SetBasedTask):
 
     def may_activate(self, k: Kinematics) -> bool:
         """Whether a joint is outside [lower + margin, upper − margin]."""
-        return bool(np.any(k.q < self._low) or np.any(k.q > self._high))
+        q = k.q
+        return bool((q < self._low).any() or (q > self._high).any())
 
     def evaluate(self, k: Kinematics):
         """σ = q (7,), J = I (7, 7), thresholds at the limits ∓ margin."""
