@@ -39,8 +39,7 @@ only for such answers that a final certificate relies on.
 
 from __future__ import annotations
 
-import contextlib
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from itertools import accumulate
 from typing import Any, NamedTuple, Protocol, runtime_checkable
 
@@ -358,7 +357,7 @@ class MotionPlannerOracle:
         effort = recheck_config(planner.config)
         self.queries += 1
         self.planner_runs += 1
-        with _configured(planner, effort):
+        with planner.configured(effort):  # the planner and its STPIK solver
             result = planner.plan(object_id, list(relocated))
         self.planning_time_s += float(getattr(result, 'planning_time', 0.0) or 0.0)
         reason = int(getattr(result, 'reason', REASON_NONE) or REASON_NONE)
@@ -424,33 +423,6 @@ def recheck_config(config: Any) -> Any:
         rrt_transit_s=min(10.0, RECHECK_EFFORT * max(float(config.rrt_transit_s), 1.0)),
         max_iterations=min(100, 2 * int(config.max_iterations)),
     )
-
-
-@contextlib.contextmanager
-def _configured(planner: Any, config: Any) -> Iterator[None]:
-    """``planner`` plans with ``config`` inside: its own ``configured`` (the motion planner:
-    the planner and its STPIK solver), else ``config`` swapped on it and on each of its parts
-    that kept its config (another planner with the same layout, the tests' stand-ins).
-    """
-    configured = getattr(planner, 'configured', None)
-    if configured is not None:
-        with configured(config):
-            yield
-        return
-    before = planner.config
-    holders = [planner, *(v for v in vars(planner).values() if _holds(v, before))]
-    for holder in holders:
-        holder.config = config
-    try:
-        yield
-    finally:
-        for holder in holders:
-            holder.config = before
-
-
-def _holds(value: Any, config: Any) -> bool:
-    """``value`` is one of the planner's parts that keeps ``config`` (its STPIK solver)."""
-    return value is not config and getattr(value, 'config', None) is config
 
 
 def approach_blockers_of(

@@ -1,5 +1,6 @@
 """BLOCKER-SEARCH: optimality on hand-built scenes, agreement with the exact search, budgets."""
 
+import contextlib
 from types import SimpleNamespace
 
 import numpy as np
@@ -555,12 +556,21 @@ def test_planner_oracle_rechecks_with_more_effort_and_keeps_its_reason() -> None
         seen.append((planner.config, stpik.config))
         return next(plans)
 
+    @contextlib.contextmanager
+    def configured(effort):  # MotionPlanner.configured: the planner and its STPIK solver
+        planner.config = stpik.config = effort
+        try:
+            yield
+        finally:
+            planner.config = stpik.config = config
+
     planner = SimpleNamespace(
         config=config,
         stpik=stpik,
         cache=cache,
         blockers=None,
         plan=plan,
+        configured=configured,
         check=lambda obj, relocated: SimpleNamespace(
             feasible=False, reason=REASON_IK_NOT_CONVERGED, blocking_ids=(), planning_time=0.1
         ),

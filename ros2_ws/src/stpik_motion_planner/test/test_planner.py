@@ -234,3 +234,18 @@ def test_the_tilt_limit_refuses_a_carry_it_cannot_hold_upright(robot):
     result = planner.check('O8', [])
     assert not result.feasible
     assert result.joint_trajectory.size == 0
+
+
+def test_configured_plans_with_the_config_in_the_planner_and_its_stpik(free_scene, robot):
+    """The recheck's more effort (#30) reaches the STPIK solver, and is undone on an error."""
+    planner = MotionPlanner(free_scene, model=robot)
+    base = planner.config
+    effort = base.replace(ik_restarts=20, time_limit_s=20.0)
+    seen = []
+    with planner.configured(effort):
+        seen.append((planner.config, planner.stpik.config, planner.geometry.config))
+    assert all(c is effort for c in seen[0])
+    assert planner.config is base and planner.stpik.config is base
+    with pytest.raises(RuntimeError), planner.configured(effort):
+        raise RuntimeError('a plan that fails')
+    assert planner.config is base and planner.stpik.config is base
