@@ -10,12 +10,21 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from qtree_scene.scene import ObjectSpec
 from stpik_motion_planner.answer_reuse import (
+    DROPPED_NOT_CLEAR,
+    DROPPED_OBJECT,
+    DROPPED_PLAN,
+    DROPPED_RELOCATED,
+    HARDER,
+    REPLAYED,
     carry_over,
+    carry_over_answers,
     clear_of_changes,
     kept_because,
+    only_gains,
     reuse_answers,
 )
 from stpik_motion_planner.config import PlannerConfig
+from stpik_motion_planner.footprint import PlannedAnswer, Region
 from stpik_motion_planner.planner import MotionPlanner
 from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.verifier import Carried
@@ -138,8 +147,8 @@ def test_reuse_needs_the_same_scene(make_cylinder, make_scenario) -> None:
     old = make_scenario(make_cylinder('T', 0.65, 0.0, 'target'))
     new = dataclasses.replace(old, name='other')
     entries = {(frozenset(), 'T'): FEASIBLE}
-    kept, why = reuse_answers(old, new, entries, lambda k, r: True)
-    assert kept == {} and 'another scene' in why
+    reuse = reuse_answers(old, new, entries, lambda k, r: True)
+    assert reuse.kept == {} and 'another scene' in reuse.summary
 
 
 def test_an_infeasible_answer_is_kept_only_where_its_plan_goes_as_it_went(
@@ -175,7 +184,110 @@ def test_an_infeasible_answer_is_kept_only_where_its_plan_goes_as_it_went(
             again.blocking_ids,
             again.approach_blockers,
         )
-    for changed in (_moved(scene, 'O9', 0.55, 0.08), _moved(scene, 'O3', 0.5, 0.35)):
-        planner = MotionPlanner(changed, old.config, model=robot)
-        carry_over(old, planner)
-        assert planner.cache.get('T', []) is None and planner.cache.get('T', ['O2']) is None
+    # O3 moved: the plan met it where it stood, so the plan could go otherwise: planned again
+    planner = MotionPlanner(_moved(scene, 'O3', 0.5, 0.35), old.config, model=robot)
+    carry_over(old, planner)
+    assert planner.cache.get('T', []) is None and planner.cache.get('T', ['O2']) is None
+
+
+def test_an_infeasible_answer_is_kept_where_its_scene_only_gained_bodies(
+    make_cylinder, make_scenario, robot
+) -> None:
+    """O9, never met by T's plan, put beside O1 (in reach of that plan): T's planning scene only
+    gained a body, so T stays infeasible (kept by only_gains, before: planned again), with its
+    blockers derived again: O9 is now one of them, as a fresh planner in the new scene finds."""
+    scene = make_scenario(
+        make_cylinder('T', 0.65, 0.0, 'target'),
+        make_cylinder('O1', 0.55, 0.0),
+        make_cylinder('O2', 0.45, -0.35),
+        make_cylinder('O9', 0.2, 0.55),
+    )
+    old = MotionPlanner(scene, PlannerConfig(time_limit_s=60.0), model=robot)
+    for object_id, relocated in [('T', []), ('T', ['O2']), ('O1', [])]:
+        old.check(object_id, relocated)
+    assert not old.cache.get('T', []).feasible and old.cache.get('T', []).blocking_ids == ('O1',)
+    beside = _moved(scene, 'O9', 0.55, 0.08)
+    new = MotionPlanner(beside, old.config, model=robot)
+    reuse = carry_over_answers(old, new)
+    kept = reuse.kept
+    assert kept[(frozenset(), 'T')] == HARDER and kept[(frozenset({'O2'}), 'T')] == HARDER
+    # O1's grasp passes where O9 stands now
+    assert reuse.dropped == {(frozenset(), 'O1'): DROPPED_NOT_CLEAR}, reuse.summary
+    fresh = MotionPlanner(beside, old.config, model=robot)
+    for relocated in ([], ['O2']):
+        answer, again = new.check('T', relocated), fresh.check('T', relocated)
+        assert answer.from_cache and not again.feasible
+        assert 'O9' in answer.blocking_ids
+        assert set(answer.blocking_ids) == set(again.blocking_ids), relocated
+    # its recorded queries no longer show what it looked at: never replayed after that
+    assert not new.footprints[(frozenset(), 'T')].region.complete
+    # O9 taken away again: its scene lost a body, so it is planned again
+    back = MotionPlanner(scene, old.config, model=robot)
+    assert carry_over_answers(new, back).dropped[(frozenset(), 'T')] == DROPPED_PLAN
+
+
+def test_a_relocated_object_that_moved_on_the_table_keeps_the_answers_it_is_relocated_in(
+    planned, robot
+) -> None:
+    """O1 moved on the table: (R, o) with O1 in R plans around O1's envelope in its drop slot,
+    wherever O1 stood, so T's answer after O1 is kept (before: dropped, 'R changed'); O1's own
+    answer goes. The kept answer passes a full verification in the new scene."""
+    moved = MotionPlanner(_moved(planned.scenario, 'O1', 0.56, 0.01), planned.config, robot)
+    reuse = carry_over_answers(planned, moved)
+    assert (frozenset({'O1'}), 'T') in reuse.kept, reuse.summary
+    assert reuse.dropped[(frozenset(), 'O1')] == DROPPED_OBJECT
+    result = moved.cache.get('T', ['O1'])
+    standing = moved.planning_scene('T', ['O1'])
+    carried = Carried(moved.scenario.object('T'), result.grasp_index, result.release_index)
+    assert moved.verifier.verify(np.asarray(result.joint_trajectory), standing, carried).ok
+    # resized, it is not the same envelope: dropped
+    bigger = tuple(
+        dataclasses.replace(o, radius=o.radius + 0.004) if o.id == 'O1' else o
+        for o in planned.scenario.objects
+    )
+    resized = MotionPlanner(
+        dataclasses.replace(planned.scenario, objects=bigger), planned.config, robot
+    )
+    dropped = carry_over_answers(planned, resized).dropped
+    assert dropped[(frozenset({'O1'}), 'T')] == DROPPED_RELOCATED
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.sets(st.sampled_from(['A', 'B', 'C'])),
+    st.sets(st.sampled_from(['B', 'C'])),
+    st.frozensets(st.sampled_from(['B', 'C', 'D'])),
+    st.booleans(),
+)
+def test_a_relocated_object_may_have_moved_but_not_otherwise_changed(changed, moved, rel, clear):
+    """Property: with the moved-only ids, R may hold those that moved, never the others."""
+    moved &= changed
+    why = kept_because((rel, 'A'), FEASIBLE, changed, lambda: clear, 4, moved=moved)
+    assert bool(why) == (clear and 'A' not in changed and not rel & (changed - moved))
+
+
+def test_only_planning_failures_get_harder() -> None:
+    key = (frozenset(), 'A')
+    yes, no = (lambda: True), (lambda: False)
+    failure = PlanResult(False, Reason.IK_NOT_CONVERGED, 'no')
+    assert kept_because(key, failure, {'B'}, no, 5, no, harder=yes) == HARDER
+    assert kept_because(key, failure, {'B'}, no, 5, yes, harder=yes) == REPLAYED
+    assert kept_because(key, failure, {'B'}, no, 5, no, harder=no) == ''
+    assert kept_because(key, failure, {'B'}, no, 0, no, harder=yes) == ''  # its slot changed
+    timeout = PlanResult(False, Reason.TIMEOUT, 'late')
+    assert kept_because(key, timeout, {'B'}, no, 5, no, harder=yes) == ''
+    assert kept_because(key, FEASIBLE, {'B'}, no, 5, no, harder=yes) == ''
+
+
+def test_only_gains_needs_every_replaced_body_unmet(make_cylinder) -> None:
+    a, b = make_cylinder('A', 0.5, 0.0), make_cylinder('B', 0.3, 0.3)
+    b_moved = dataclasses.replace(b, position=(0.5, 0.1, b.position[2]))
+    region = Region(np.zeros((0, 3)), np.zeros(0), frozenset({a}), complete=True)
+    planned = PlannedAnswer(PlanResult(False, Reason.NO_CARTESIAN_PATH, 'no'), region)
+    assert only_gains(planned, [], [b])  # added
+    assert only_gains(planned, [b], [b_moved])  # moved from where the plan never looked
+    assert not only_gains(planned, [a], [b_moved])  # A was met where it stood
+    assert not only_gains(planned, [b], [])  # only taken away: replays decides
+    incomplete = PlannedAnswer(planned.result, dataclasses.replace(region, complete=False))
+    assert only_gains(incomplete, [], [b]) and not only_gains(incomplete, [b], [b_moved])
+    assert not only_gains(None, [], [b])

@@ -183,6 +183,13 @@ def targets_met(outcomes: list, rows: list[dict]) -> dict:
         'kept_infeasible_answered_otherwise_afresh': sum(
             o.kept_infeasible_differ for o in outcomes
         ),
+        'kept_harder': sum(o.kept_harder for o in outcomes),
+        'kept_harder_feasible_afresh': sum(o.kept_harder_feasible_afresh for o in outcomes),
+        'kept_harder_reason_differs': sum(o.kept_harder_reason_differs for o in outcomes),
+        # the answers dropped on those runs, by why (answer_reuse.judge)
+        'dropped_one_object_by': dict(
+            sum((Counter(o.dropped_by) for o in one_object), Counter()).most_common()
+        ),
         'unsolvable_after_event': sum(o.solvable is False for o in outcomes),
         'undecided_after_event': sum(o.solvable is None for o in outcomes),
         'solvable_decided_by': dict(Counter(o.decided_by for o in outcomes)),

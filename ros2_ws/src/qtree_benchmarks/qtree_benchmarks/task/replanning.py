@@ -27,8 +27,9 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections import Counter
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from statistics import mean, median
 from typing import Any
 
@@ -70,7 +71,11 @@ class RunOutcome:
     violations: int
     sequence: tuple[str, ...]  # the whole executed retrieval (prefix, then the re-plan's)
     kept_infeasible: int = 0  # kept infeasible answers, each planned again afresh [-]
-    kept_infeasible_differ: int = 0  # of them, answered otherwise by a fresh planner [-]
+    kept_infeasible_differ: int = 0  # of them, kept as replaying: answered otherwise afresh [-]
+    kept_harder: int = 0  # of them, kept as their scene only gained bodies [-]
+    kept_harder_feasible_afresh: int = 0  # of those, feasible for a fresh planner [-]
+    kept_harder_reason_differs: int = 0  # of those, infeasible afresh for another reason [-]
+    dropped_by: dict[str, int] = field(default_factory=dict)  # dropped answers by why [-]
 
     @property
     def reused_share(self) -> float:
@@ -285,7 +290,7 @@ def run_event(
         seed: seed of the step and the change drawn.
         make_planner: ``make_planner(scenario)`` → a MotionPlanner (the benchmark's config).
     """
-    from stpik_motion_planner.answer_reuse import carry_over
+    from stpik_motion_planner.answer_reuse import HARDER, carry_over_answers
 
     rng = np.random.default_rng(seed)
     steps = range(len(sequence) - 1) if event == 'moved_out_of_way' else range(len(sequence))
@@ -301,9 +306,12 @@ def run_event(
     start = time.perf_counter()
     if event == 'grasp_failure':  # no geometry changed: the node keeps its planner (and cache)
         planner, reused = old, cached
+        why: dict[tuple[frozenset[str], str], str] = {}
+        dropped: dict[tuple[frozenset[str], str], str] = {}
     else:
         planner = make_planner(scene)
-        carry_over(old, planner)
+        reuse = carry_over_answers(old, planner)
+        why, dropped = reuse.kept, reuse.dropped
         reused = len(planner.cache)
     kept = list(planner.cache.items()) if planner is not old else []
     target = scene.target.id
@@ -317,14 +325,20 @@ def run_event(
         for (relocated, object_id), answer in kept
         if answer.feasible
     )
-    # Each kept infeasible answer against a fresh planner's in the new scene (#32 item 4: the
-    # same answer, message and blockers included).
+    # Each kept infeasible answer against a fresh planner's in the new scene (#32 item 4): one
+    # kept as replaying must be the same answer, message and blockers included; one kept as
+    # its scene only gained bodies must stay infeasible (its reason may differ).
     infeasible = [(key, answer) for key, answer in kept if not answer.feasible]
     fresh = make_planner(scene) if infeasible else planner
-    differ = sum(
-        not same_answer(answer, fresh.check(object_id, list(relocated)))
-        for (relocated, object_id), answer in infeasible
-    )
+    differ = harder = harder_feasible = harder_reason = 0
+    for (relocated, object_id), answer in infeasible:
+        again = fresh.check(object_id, list(relocated))
+        if why.get((relocated, object_id)) == HARDER:
+            harder += 1
+            harder_feasible += again.feasible
+            harder_reason += not again.feasible and again.reason != answer.reason
+        else:
+            differ += not same_answer(answer, again)
     executed = [*prefix, *result.sequence]
     for i in range(len(prefix), len(executed) if retrieved else 0):
         answer = planner.check(executed[i], executed[:i])
@@ -349,6 +363,10 @@ def run_event(
         sequence=tuple(executed) if retrieved else (),
         kept_infeasible=len(infeasible),
         kept_infeasible_differ=differ,
+        kept_harder=harder,
+        kept_harder_feasible_afresh=harder_feasible,
+        kept_harder_reason_differs=harder_reason,
+        dropped_by=dict(Counter(dropped.values())),
     )
 
 
