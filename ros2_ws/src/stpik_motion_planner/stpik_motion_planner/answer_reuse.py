@@ -255,23 +255,6 @@ def judge(
     return Verdict(False, DROPPED_PLAN)
 
 
-def kept_because(
-    key: CacheKey,
-    result: PlanResult,
-    changed: set[str],
-    clear: Callable[[], bool],
-    slots: int,
-    replay: Callable[[], bool] = lambda: False,
-    moved: Set[str] = frozenset(),
-    harder: Callable[[], bool] = lambda: False,
-) -> str:
-    """Why the cached answer ``result`` of ``key`` is still true, or '' when it must be dropped
-    (:func:`judge`, same arguments).
-    """
-    verdict = judge(key, result, changed, clear, slots, replay, moved, harder)
-    return verdict.why if verdict.kept else ''
-
-
 def reuse_answers(
     old: Scenario,
     new: Scenario,

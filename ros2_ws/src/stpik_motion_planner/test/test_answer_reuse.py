@@ -19,7 +19,7 @@ from stpik_motion_planner.answer_reuse import (
     carry_over,
     carry_over_answers,
     clear_of_changes,
-    kept_because,
+    judge,
     only_gains,
     reuse_answers,
 )
@@ -30,6 +30,14 @@ from stpik_motion_planner.result import PlanResult, Reason
 from stpik_motion_planner.verifier import Carried
 
 FEASIBLE = PlanResult(True, Reason.SUCCESS, 'ok')
+
+
+def kept_because(*args, **kwargs) -> str:
+    """Why :func:`judge` keeps the answer, '' when it drops it."""
+    verdict = judge(*args, **kwargs)
+    return verdict.why if verdict.kept else ''
+
+
 coord = st.floats(-1.0, 1.0, allow_nan=False)
 
 
@@ -72,6 +80,14 @@ def test_infeasible_answers_kept_by_size_or_when_their_plan_replays() -> None:
     assert kept_because(key, big, {'A'}, never, 5, replays) == ''
 
 
+def _asked(scene, robot, questions) -> MotionPlanner:
+    """A planner of ``scene`` that answered ``questions`` ((object id, relocated) pairs)."""
+    planner = MotionPlanner(scene, PlannerConfig(time_limit_s=60.0), model=robot)
+    for object_id, relocated in questions:
+        planner.check(object_id, relocated)
+    return planner
+
+
 @pytest.fixture(scope='module')
 def planned(make_cylinder, make_scenario, robot):
     scene = make_scenario(
@@ -80,10 +96,7 @@ def planned(make_cylinder, make_scenario, robot):
         make_cylinder('O2', 0.45, -0.35),
         make_cylinder('O3', 0.5, 0.3),
     )
-    planner = MotionPlanner(scene, PlannerConfig(time_limit_s=60.0), model=robot)
-    for object_id, relocated in [('T', []), ('O1', []), ('T', ['O1']), ('O2', []), ('O3', [])]:
-        planner.check(object_id, relocated)
-    return planner
+    return _asked(scene, robot, [('T', []), ('O1', []), ('T', ['O1']), ('O2', []), ('O3', [])])
 
 
 def test_clear_of_changes_is_the_verifier_among_the_changed_objects(planned) -> None:
@@ -164,9 +177,7 @@ def test_an_infeasible_answer_is_kept_only_where_its_plan_goes_as_it_went(
         make_cylinder('O3', 0.5, 0.3),
         make_cylinder('O9', 0.2, 0.55),
     )
-    old = MotionPlanner(scene, PlannerConfig(time_limit_s=60.0), model=robot)
-    for object_id, relocated in [('T', []), ('T', ['O2']), ('O1', [])]:
-        old.check(object_id, relocated)
+    old = _asked(scene, robot, [('T', []), ('T', ['O2']), ('O1', [])])
     assert not old.cache.get('T', []).feasible and old.cache.get('T', []).blocking_ids == ('O1',)
     met = {o.id for o in old.footprints[(frozenset(), 'T')].region.met}
     assert 'O9' not in met and 'O1' in met
@@ -202,9 +213,7 @@ def test_an_infeasible_answer_is_kept_where_its_scene_only_gained_bodies(
         make_cylinder('O2', 0.45, -0.35),
         make_cylinder('O9', 0.2, 0.55),
     )
-    old = MotionPlanner(scene, PlannerConfig(time_limit_s=60.0), model=robot)
-    for object_id, relocated in [('T', []), ('T', ['O2']), ('O1', [])]:
-        old.check(object_id, relocated)
+    old = _asked(scene, robot, [('T', []), ('T', ['O2']), ('O1', [])])
     assert not old.cache.get('T', []).feasible and old.cache.get('T', []).blocking_ids == ('O1',)
     beside = _moved(scene, 'O9', 0.55, 0.08)
     new = MotionPlanner(beside, old.config, model=robot)
