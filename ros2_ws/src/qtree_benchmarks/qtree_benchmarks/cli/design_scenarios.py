@@ -8,9 +8,14 @@ search over sets of relocated objects, ``qtree_task_planner.exact``) and prints 
 (depth of the target node in the Q-tree, target included) and the number of feasible target
 sequences xi_p, then writes the YAML files with ``--write``.
 
+``--structures`` prints, for the paper's difficulty of each scene (level, ξ_p, ξ* = 1 of
+:data:`PAPER_DIFFICULTY`), the blocking structures that have it (:mod:`..task.scene_structures`):
+which object must free which, before any geometry (#31).
+
 Example:
-    ./qtree run python scripts/design_scenarios.py            # check
-    ./qtree run python scripts/design_scenarios.py --write    # and rewrite s1/s2/s3.yaml
+    ./qtree run python scripts/design_scenarios.py               # check
+    ./qtree run python scripts/design_scenarios.py --write       # and rewrite s1/s2/s3.yaml
+    ./qtree run python scripts/design_scenarios.py --structures  # structures of the paper's
 """
 
 from __future__ import annotations
@@ -27,7 +32,10 @@ from qtree_task_planner.exact import count_feasible_sequences, solve_exact
 from qtree_task_planner.oracle import MotionPlannerOracle
 
 from qtree_benchmarks.paths import repo_root
+from qtree_benchmarks.task.scene_structures import structures
 
+# The paper's scenes: (optimal level with the target, xi_p, xi*) (Sect. 4).
+PAPER_DIFFICULTY = {'s1': (4, 10, 1), 's2': (5, 20, 1), 's3': (6, 20, 1)}
 SCENARIO_DIR = repo_root() / 'ros2_ws/src/qtree_scene/qtree_scene/scenarios'
 RADIUS = 0.03  # cylinder radius [m]
 
@@ -119,7 +127,21 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--write', action='store_true', help='rewrite s1/s2/s3.yaml')
     parser.add_argument('--only', nargs='*', default=sorted(LAYOUTS), help='scenarios to do')
+    parser.add_argument(
+        '--structures', action='store_true', help="print the paper's structures and stop"
+    )
     args = parser.parse_args(argv)
+    unknown = sorted(set(args.only) - set(LAYOUTS))
+    if unknown:
+        parser.error(f'--only: unknown scenario {unknown[0]!r} (one of {sorted(LAYOUTS)})')
+    if args.structures:
+        for name in args.only:
+            level, xi_p, _ = PAPER_DIFFICULTY[name]
+            found = list(structures(level, xi_p))
+            print(f'{name}: level {level}, xi_p {xi_p}, xi* 1: {len(found)} structures')
+            for structure in found[:5]:
+                print(f'  {structure}')
+        return 0
     wanted = {'s1': 4, 's2': 5, 's3': 6}
     ok = True
     for name in args.only:
