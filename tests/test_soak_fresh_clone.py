@@ -9,7 +9,9 @@ from qtree_benchmarks.soak import (
     FRESH_CLONE_COMMAND,
     clean_environment,
     fresh_clone,
+    repeat_runs,
     summary_failures,
+    worst_tracking_error,
 )
 
 OUTPUT = """\
@@ -57,3 +59,29 @@ def test_fresh_clone_has_main_and_shared_beside_it(tmp_path) -> None:
     assert not (clone / '.venv').exists()  # set up from scratch by its first run
     if (REPO_ROOT.parent / 'shared').exists():
         assert (tmp_path / 'shared' / 'paper').is_dir()
+
+
+def test_a_cut_soak_leaves_the_runs_it_finished() -> None:
+    seen: list[dict] = []
+    outcomes = [(0, [], True), (1, ['tests/t.py::a'], False), (0, [], True)]
+    tally = repeat_runs(3, lambda i: i, lambda i, done: outcomes[done], None, seen.append)
+    assert [(c['runs'], c['passed'], c['failed_tests']) for c in seen] == [
+        (1, 1, {}),
+        (2, 1, {'tests/t.py::a': 1}),
+    ]
+    assert (tally['runs'], tally['passed'], tally['exit_codes']) == (3, 2, [0, 1, 0])
+
+
+def test_the_worst_tracking_error_is_read_from_every_node_log(tmp_path) -> None:
+    assert worst_tracking_error(tmp_path / 'missing') is None
+    (tmp_path / 'a' / 'logs').mkdir(parents=True)
+    (tmp_path / 'a' / 'logs' / 'motion_planner_node.log').write_text(
+        '[INFO] segment to sample 40 done: 310 ticks, worst EE error 4.2 mm / 0.031 rad\n'
+        '[INFO] segment to sample 61 stopped: 12 ticks, worst EE error 53.1 mm / 0.116 rad\n'
+    )
+    (tmp_path / 'b.log').write_text(
+        'segment to sample 9 done: 1 ticks, worst EE error 7.0 mm / 0.2 rad'
+    )
+    assert worst_tracking_error(tmp_path) == (53.1, 0.2)
+    (tmp_path / 'c').mkdir()
+    assert worst_tracking_error(tmp_path / 'c') is None

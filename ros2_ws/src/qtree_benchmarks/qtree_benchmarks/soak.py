@@ -161,15 +161,31 @@ def repeat_runs(
     run: Callable[[int], _R],
     judge: Callable[[int, _R], Outcome],
     progress: Callable[[int, list[str]], Any] | None = None,
+    checkpoint: Callable[[dict[str, Any]], Any] | None = None,
 ) -> dict[str, Any]:
     """``run(i)`` for i in 0..runs-1 in a row, each timed, then judged by ``judge(i, done)``.
+
+    ``checkpoint`` (optional) receives the tally of the runs done so far after each run, so a
+    soak of hours that is cut short still leaves its figures.
 
     Returns:
         ``runs``, ``passed`` (runs judged passed), ``failed_tests`` (test id → number of runs it
         failed in), ``exit_codes`` and ``run_seconds`` (one per run; ``run`` alone is timed).
     """
     failures: Counter[str] = Counter()
-    passed, seconds, codes = 0, [], []
+    passed = 0
+    seconds: list[float] = []
+    codes: list[int] = []
+
+    def tally(done_runs: int) -> dict[str, Any]:
+        return {
+            'runs': done_runs,
+            'passed': passed,
+            'failed_tests': dict(failures),
+            'exit_codes': list(codes),
+            'run_seconds': list(seconds),
+        }
+
     for i in range(runs):
         start = time.monotonic()
         done = run(i)
@@ -180,13 +196,9 @@ def repeat_runs(
         failures.update(failed)
         if progress is not None:
             progress(i, failed)
-    return {
-        'runs': runs,
-        'passed': passed,
-        'failed_tests': dict(failures),
-        'exit_codes': codes,
-        'run_seconds': seconds,
-    }
+        if checkpoint is not None and i + 1 < runs:
+            checkpoint(tally(i + 1))
+    return tally(runs)
 
 
 def repeat_tests(
@@ -280,21 +292,48 @@ def fresh_clone(work_dir: Path, branch: str = 'main') -> Path:
     return clone
 
 
+TRACKING_LINE = re.compile(r'worst EE error ([0-9.]+) mm / ([0-9.]+) rad')
+
+
+def worst_tracking_error(root: Path) -> tuple[float, float] | None:
+    """Largest closed-loop EE error (position [mm], orientation [rad]) the motion planner
+    logged for a segment in any node log under ``root`` (``segment ... worst EE error``), or
+    None when no log has one.
+    """
+    worst: tuple[float, float] | None = None
+    for log in root.rglob('*.log') if root.is_dir() else ():
+        with contextlib.suppress(OSError):
+            for m in TRACKING_LINE.finditer(log.read_text(errors='replace')):
+                mm, rad = float(m.group(1)), float(m.group(2))
+                worst = (mm, rad) if worst is None else (max(worst[0], mm), max(worst[1], rad))
+    return worst
+
+
+def pytest_current_dir() -> Path:
+    """The base temporary directory of pytest's latest session (``pytest-current``)."""
+    user = os.environ.get('USER') or str(os.getuid())
+    return Path(tempfile.gettempdir()) / f'pytest-of-{user}' / 'pytest-current'
+
+
 def repeat_fresh_clone(
     runs: int,
     work_dir: Path,
     progress: Callable[[int, list[str]], Any] | None = None,
     branch: str = 'main',
+    checkpoint: Callable[[dict[str, Any]], Any] | None = None,
 ) -> dict[str, Any]:
     """Run the README's ``./qtree test`` ``runs`` times in a row on a fresh clone of ``branch``.
 
     The first run sets the clone up from scratch (as on a new machine); each run's output is
-    kept in ``work_dir/fresh_run_<i>.log``.
+    kept in ``work_dir/fresh_run_<i>.log``. After each run the node logs of pytest's session are
+    read for the worst closed-loop tracking error (the figure behind the node tests'
+    ``max_tracking_error_m``, docs/RELIABILITY.md).
 
     Returns:
         ``fresh_clone_runs``, ``fresh_clone_passed``, ``fresh_clone_failed_tests`` (test id →
-        runs it failed in), ``fresh_clone_exit_codes``, ``fresh_clone_run_seconds`` and
-        ``commit`` (of the clone).
+        runs it failed in), ``fresh_clone_exit_codes``, ``fresh_clone_run_seconds``,
+        ``fresh_clone_worst_tracking_error_mm`` / ``_rad`` (per run, None when not logged) and
+        ``commit`` (of the clone). ``checkpoint`` receives the same keys after each run.
     """
     work_dir.mkdir(parents=True, exist_ok=True)
     clone = fresh_clone(work_dir, branch)
@@ -312,15 +351,30 @@ def repeat_fresh_clone(
             text=True,
         )
 
+    worst_mm: list[float | None] = []
+    worst_rad: list[float | None] = []
+
     def judge(i: int, done: subprocess.CompletedProcess[str]) -> Outcome:
         (work_dir / f'fresh_run_{i}.log').write_text(done.stdout)
+        worst = worst_tracking_error(pytest_current_dir())
+        worst_mm.append(None if worst is None else worst[0])
+        worst_rad.append(None if worst is None else worst[1])
         failed = summary_failures(done.stdout)
         if done.returncode != 0 and not failed:
             failed = [f'<exit code {done.returncode}, no test named: see fresh_run_{i}.log>']
         return done.returncode, failed, done.returncode == 0
 
-    tally = repeat_runs(runs, run, judge, progress)
-    return {**{f'fresh_clone_{key}': value for key, value in tally.items()}, 'commit': commit}
+    def keyed(tally: dict[str, Any]) -> dict[str, Any]:
+        done_runs = tally['runs']
+        return {
+            **{f'fresh_clone_{key}': value for key, value in tally.items()},
+            'fresh_clone_worst_tracking_error_mm': worst_mm[:done_runs],
+            'fresh_clone_worst_tracking_error_rad': worst_rad[:done_runs],
+            'commit': commit,
+        }
+
+    partial = None if checkpoint is None else (lambda tally: checkpoint(keyed(tally)))
+    return keyed(repeat_runs(runs, run, judge, progress, partial))
 
 
 def default_work_dir() -> Path:

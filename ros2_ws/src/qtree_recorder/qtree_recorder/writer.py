@@ -4,6 +4,12 @@ The node's subscriptions only queue ``(topic, type, raw bytes, receive time, QoS
 hash)``; :class:`RecordWriter` writes them unchanged on its own thread, decodes the few types it
 derives from (joint states → /tf, /robot_description, /scene → /scene_markers) and feeds the live
 Rerun view. An exception (a bad message, a full disk) is logged, throttled, and never stops it.
+
+The MCAP file comes first: when the writer falls behind (a loaded machine, a slow Rerun viewer)
+the live view skips the high-rate messages (joint states and everything it decodes itself) until
+the queue is short again, and at the end the backlog is written to the file only. The README
+demo, with a type check running beside it, was SIGKILLed at its 10 s stop while the writer still
+decoded joint states for Rerun: the MCAP was cut at its last complete chunk.
 """
 
 from __future__ import annotations
@@ -25,6 +31,8 @@ from qtree_recorder.rerun_feed import RerunFeed
 
 IDLE_WAIT_S = 0.2  # [s] worker wake-up period when no message arrives
 FINISH_WAIT_S = 30.0  # [s] longest wait for the queue to drain at the end
+# queued messages above which the live Rerun view skips high-rate messages (the MCAP keeps them)
+RERUN_BACKLOG = 200
 
 
 class RecordWriter:
@@ -32,6 +40,8 @@ class RecordWriter:
 
     Attributes:
         errors: exceptions caught so far (logged: the first 5, then every 1000th).
+        rerun_skipped: messages written to the MCAP but not shown live, because the writer was
+            behind (more than :data:`RERUN_BACKLOG` queued) or finishing.
     """
 
     def __init__(
@@ -41,6 +51,8 @@ class RecordWriter:
         self.recording, self.rerun, self._error = recording, rerun, error
         self._queue: queue.Queue = queue.Queue()
         self.errors = 0
+        self.rerun_skipped = 0
+        self._finishing = threading.Event()
         self._worker = threading.Thread(target=self._work, name='mcap_writer', daemon=True)
         self._worker.start()
 
@@ -76,6 +88,7 @@ class RecordWriter:
         rec = self.recording
         if rec is not None:
             rec.record(topic, type_name, raw, t_ns, offers, type_hash=type_hash)
+        behind = self._finishing.is_set() or self._queue.qsize() > RERUN_BACKLOG
         if type_name == 'sensor_msgs/msg/JointState':
             msg = deserialize_message(raw, JointState)
             if rec is not None:
@@ -84,17 +97,28 @@ class RecordWriter:
             msg = deserialize_message(raw, String)
             if rec is not None:
                 rec.on_robot_description(msg.data, t_ns)
+            behind = False  # rare, and the view cannot draw the arm without it
         elif type_name == 'qtree_msgs/msg/Scene':
             msg = deserialize_message(raw, Scene)
             if rec is not None:
                 rec.on_scene(msg, t_ns)
+            behind = False  # rare: the objects the view draws
         else:
+            msg = None
+        if behind:
+            self.rerun_skipped += 1
+        elif msg is None:
             self.rerun.on_raw(topic, type_name, raw, t_ns)
-            return
-        self.rerun.on_decoded(topic, msg, t_ns)
+        else:
+            self.rerun.on_decoded(topic, msg, t_ns)
 
     def finish(self, custom: dict[str, str], path: Any) -> tuple[str, bool]:
-        """Write everything queued, finish the file and the Rerun view: (log line, is error)."""
+        """Write everything queued, finish the file and the Rerun view: (log line, is error).
+
+        The backlog goes to the MCAP only (the live view skips it), so a writer that was behind
+        finishes in the time the file needs, well within a node's stop time-out.
+        """
+        self._finishing.set()
         self._queue.put(None)
         self._worker.join(timeout=FINISH_WAIT_S)
         line, failed = '', False
@@ -104,5 +128,8 @@ class RecordWriter:
                 line = f'recording finished: {stats.message_count} messages in {path}'
             except RecorderError as err:
                 line, failed = f'{err} (data up to the last chunk stays readable)', True
+        if self.rerun_skipped:
+            note = f'the live Rerun view skipped {self.rerun_skipped} messages it was behind on'
+            line = f'{line} ({note}; the MCAP has them)' if line else note
         self.rerun.close()
         return line, failed

@@ -296,6 +296,9 @@ class ClosedLoopController:
         self._settle_s = 0.0
         self._settle_window: list[np.ndarray] = []  # EE errors (6,) of the last SETTLE_HOLD_S
         self._stalled_s = 0.0
+        self.worst_error_m = 0.0  # largest EE position error of the segment so far [m]
+        self.worst_error_rad = 0.0  # largest EE orientation error of the segment so far [rad]
+        self.ticks = 0  # control ticks of the segment so far
         self._offset = np.zeros(7)  # slow estimate of measured − streamed joints [rad] (7,)
 
     @property
@@ -331,6 +334,8 @@ class ClosedLoopController:
         self._settle_s = 0.0
         self._settle_window = []
         self._stalled_s = 0.0
+        self.worst_error_m = self.worst_error_rad = 0.0
+        self.ticks = 0
 
     def step(self, q_meas: np.ndarray) -> ControlTick:
         """One control tick from the measured joints ``q_meas`` [rad] (7,).
@@ -357,6 +362,9 @@ class ClosedLoopController:
         self._check_sets(k)
         error = pose_error(ee_ref, k.world_ee)
         error_m, error_rad = float(np.linalg.norm(error[:3])), float(np.linalg.norm(error[3:]))
+        self.ticks += 1
+        self.worst_error_m = max(self.worst_error_m, error_m)
+        self.worst_error_rad = max(self.worst_error_rad, error_rad)
         rate = self._time_scale(error_m)
         dt = c.period * rate
         t_next = min(self._t + dt, self._t_end) if self.phase == 'tracking' else self._t_end

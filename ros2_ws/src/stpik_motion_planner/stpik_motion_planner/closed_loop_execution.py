@@ -238,6 +238,11 @@ class Execution(TrajectoryExecution):
                     f'(execution_timeout_s; at {plan_time:.2f} s of '
                     f'{motion.times[end]:.2f} s of the plan)'
                 )
+        c = self._live_controller
+        self._node.get_logger().info(
+            f'segment to sample {end} {"stopped" if self._stopped else "done"}: {c.ticks} ticks, '
+            f'worst EE error {c.worst_error_m * 1e3:.1f} mm / {c.worst_error_rad:.3f} rad'
+        )
         return self._stopped
 
     def _undone(

@@ -283,3 +283,23 @@ def test_a_lost_set_stops_with_the_task_the_pair_and_the_margin(plan) -> None:
         controller._check_sets(kin)
     assert stop.value.cause == 'self_hit'
     assert 'link_3 and link_6' in str(stop.value) and 'apart' in str(stop.value)
+
+
+def test_each_segment_reports_its_worst_tracking_error(plan) -> None:
+    """#26: the node logs each segment's worst EE error (the figure behind the node tests'
+    max_tracking_error_m); it grows within a segment and starts again with the next."""
+    planner, result = plan
+    seen: list[tuple[int, float, float]] = []
+
+    def watch(_ticks, controller) -> None:
+        seen.append((controller.ticks, controller.worst_error_m, controller.worst_error_rad))
+
+    _closed_loop(planner, result, OFFSET, watch, lag=5)
+    starts = [i for i, (ticks, _, _) in enumerate(seen) if ticks == 1]
+    assert starts == [0, starts[1]] and starts[1] > 1  # two segments, each counted from 1
+    for lo, hi in ((0, starts[1]), (starts[1], len(seen))):
+        worst = [m for _, m, _ in seen[lo:hi]]
+        assert worst == sorted(worst)  # a running maximum
+        # the 0.05 rad shoulder offset puts the hand centimetres off before the loop removes it
+        assert 0.005 < worst[-1] < ExecutionConfig().max_tracking_error_m
+    assert all(rad >= 0.0 for _, _, rad in seen)

@@ -94,20 +94,31 @@ def fresh_clone_main(args: argparse.Namespace) -> int:
     """``--fresh-clone``: the README's test command on a fresh clone, soak.json updated."""
     work = default_work_dir()
     previous = json.loads(args.output.read_text()) if args.output.is_file() else {}
+
+    def write(fresh: dict, complete: bool) -> None:
+        previous.update(fresh)
+        previous.update(
+            loaded=args.load > 0,
+            load_processes=args.load,
+            fresh_clone_complete=complete,  # False while runs are still to come
+            fresh_clone_date_utc=time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
+            fresh_clone_work_dir=str(work / 'fresh'),
+        )
+        args.output.parent.mkdir(parents=True, exist_ok=True)
+        args.output.write_text(json.dumps(previous, indent=2) + '\n')
+
     with (
         cpu_hog(args.load) if args.load else contextlib.nullcontext(),
         tqdm(total=args.runs, desc=f'./qtree test on a fresh clone of {args.branch}') as bar,
     ):
-        fresh = repeat_fresh_clone(args.runs, work / 'fresh', _progress(bar), args.branch)
-    previous.update(fresh)
-    previous.update(
-        loaded=args.load > 0,
-        load_processes=args.load,
-        fresh_clone_date_utc=time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
-        fresh_clone_work_dir=str(work / 'fresh'),
-    )
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(json.dumps(previous, indent=2) + '\n')
+        fresh = repeat_fresh_clone(
+            args.runs,
+            work / 'fresh',
+            _progress(bar),
+            args.branch,
+            checkpoint=lambda partial: write(partial, complete=False),
+        )
+    write(fresh, complete=True)
     print(
         f'fresh clone {fresh["commit"][:10]}: {fresh["fresh_clone_passed"]}/{args.runs} runs of '
         f'./qtree test green ({"loaded, " + str(args.load) + " busy" if args.load else "idle"}); '
