@@ -59,12 +59,6 @@ SUPPORT_TOLERANCE_M = 0.012  # bottom slice of the carried object not checked vs
 # The executor's stop distance: the planner's obstacle_min_distance_m (5 mm) less the closed
 # loop's margin_tolerance_m (2 mm) [m].
 STOP_CLEARANCE_M = 0.003
-# Above this many pairs to bound at one sample, their bounding spheres are read first (one
-# placement read per moving body, about 3 µs each) instead of an exact distance each (2 µs).
-SPHERE_BOUND_MIN_PAIRS = 16
-# coal's distances are exact to about 1e-6 m (a world-fixed pair moved 1.4 µm between samples
-# with a motion bound of 0); a bound carried from one sample to the next loses this much more [m].
-DISTANCE_TOLERANCE_M = 1e-5
 # ``min_distance_m`` is exact where it is below this [m] (above, a lower bound of it).
 EXACT_BELOW_M = 0.02
 _HAND_KEYS = ('link_7', 'link_finger')
@@ -411,40 +405,26 @@ class TrajectoryVerifier:
         moving = [i for i, g in enumerate(gm.geometryObjects) if g.parentJoint != 0]
         centres = np.array([g.placement.translation for g in gm.geometryObjects]).reshape(-1, 3)
 
-        def sphere_bounds(i: int, pairs: np.ndarray) -> np.ndarray:
-            """Centre distance minus both bounding radii of ``pairs`` at sample i [m]."""
-            placements = full.oMg
-            for g in moving:
-                centres[g] = placements[g].translation
-            a, b = first[pairs], second[pairs]
-            return np.linalg.norm(centres[a] - centres[b], axis=1) - radius[a] - radius[b]
-
         def distance(i: int, phase: str) -> np.ndarray:
             """Per pair at sample i: the exact distance where it can matter, else a lower bound.
 
-            A lower bound stands where it exceeds both the clearance plus the pair's motion on
-            the neighbouring segments (then the pair is free at the sample and, from it, on
-            both segments, which is all the checks use) and the smallest distance found so far
-            up to :data:`EXACT_BELOW_M` (so ``min_distance_m`` is exact below that: it was a
-            bounding-sphere bound, 7.8 mm reported where the exact minimum is 12 mm). From
-            sample i−1 the bound is d_{i−1} − m_{i−1} (along a segment a pair's distance changes
-            by at most its motion bound m); at the first sample, and for many pairs at once,
-            the bounding spheres give it. Same verdicts and CPU time on 214 planner calls
-            (benchmarks/results/verifier_exact_min_ab.json).
+            The bound (centre distance minus both bounding radii) is used where it exceeds both
+            the clearance plus the pair's motion on both neighbouring segments (such a pair is
+            free at the sample and, from it, on both segments, which is all the checks use) and
+            the smallest distance found so far up to :data:`EXACT_BELOW_M`, so
+            ``min_distance_m`` is exact below that (it was a bound: 7.8 mm reported where the
+            exact minimum is 12 mm; same verdicts and CPU time on 214 planner calls,
+            benchmarks/results/verifier_exact_min_ab.json).
             """
             if i not in cache:
                 pin.updateGeometryPlacements(self.model, self.data, gm, full, q[i])
+                placements = full.oMg
+                for g in moving:
+                    centres[g] = placements[g].translation
+                d = np.linalg.norm(centres[first] - centres[second], axis=1)
+                d -= radius[first] + radius[second]
                 floor = np.maximum(around[i], min(report.min_distance_m, EXACT_BELOW_M))
-                if i - 1 in cache:
-                    d = cache[i - 1] - motion[i - 1] - DISTANCE_TOLERANCE_M
-                    need = np.flatnonzero(d < floor)
-                else:
-                    d = np.full(len(first), -np.inf)
-                    need = np.arange(len(first))
-                if need.size > SPHERE_BOUND_MIN_PAIRS:
-                    d[need] = np.maximum(d[need], sphere_bounds(i, need))
-                    need = need[d[need] < floor[need]]
-                for k in need:
+                for k in np.flatnonzero(d < floor):
                     d[k] = pin.computeDistance(gm, full, int(k)).min_distance
                 cache[i] = d
             return np.where(masks[phase], cache[i], np.inf)

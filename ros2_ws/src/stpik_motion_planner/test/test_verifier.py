@@ -162,11 +162,11 @@ def test_the_planner_proves_the_executors_stop_distance(robot):
     assert report.ok and STOP_CLEARANCE_M < report.min_distance_m < 0.021
 
 
-def test_the_smallest_distance_is_exact_and_bounds_carried_along_are_sound(robot) -> None:
-    """#28: the verifier carries each pair's bound from sample to sample (d − m, the pair's
-    motion bound) instead of reading every placement; the smallest distance it reports is the
-    exact one over every pair it checks at every sample (it was a bounding-sphere bound: 7.8 mm
-    reported where the exact minimum is 12 mm on a trajectory of s1 over the table alone)."""
+def test_the_smallest_distance_is_exact_and_the_motion_bounds_are_sound(robot) -> None:
+    """#28: the smallest distance the verifier reports is the exact one over every pair it
+    checks at every sample (it was a bounding-sphere bound: 7.8 mm reported where the exact
+    minimum is 12 mm on a trajectory of s1 over the table alone), and no pair gets closer along
+    a segment than its motion bound (what conservative advancement relies on)."""
     import pinocchio as pin
     from qtree_scene.scenario import load_scenario
     from stpik_motion_planner.planner import MotionPlanner
@@ -192,7 +192,7 @@ def test_the_smallest_distance_is_exact_and_bounds_carried_along_are_sound(robot
             [pin.computeDistance(gm, gd, k).min_distance for k in range(len(masks['before']))]
         )
     exact = np.array(exact)
-    # the carried bound d_{i-1} - m_{i-1} is sound: no pair gets closer than its motion bound
+    # no pair's distance changes between samples by more than its motion bound
     assert np.all(np.abs(np.diff(exact, axis=0)) <= checker.motion_bounds(q, reach) + 1e-5)
 
     def phase(i: int) -> str:
