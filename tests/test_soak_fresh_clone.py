@@ -9,6 +9,7 @@ from qtree_benchmarks.soak import (
     FRESH_CLONE_COMMAND,
     clean_environment,
     fresh_clone,
+    pytest_current_dir,
     repeat_runs,
     summary_failures,
     worst_tracking_error,
@@ -85,3 +86,11 @@ def test_the_worst_tracking_error_is_read_from_every_node_log(tmp_path) -> None:
     assert worst_tracking_error(tmp_path) == (53.1, 0.2)
     (tmp_path / 'c').mkdir()
     assert worst_tracking_error(tmp_path / 'c') is None
+
+
+def test_the_node_logs_are_looked_for_where_pytest_puts_them(monkeypatch) -> None:
+    import getpass
+
+    monkeypatch.delenv('USER', raising=False)
+    monkeypatch.delenv('LOGNAME', raising=False)
+    assert pytest_current_dir().parent.name == f'pytest-of-{getpass.getuser()}'
