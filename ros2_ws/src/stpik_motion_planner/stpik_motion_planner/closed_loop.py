@@ -14,11 +14,17 @@ planner's failure margins + ``activation_slack_m`` and the joint-limit task
 
 and the posture task's is Δq_d + K·dt (q_d(t) − q_m) with Δq_d = q_d(t + dt) − q_d(t), so the
 redundancy follows the plan (also through joint-space transits near singularities). The joint
-step is integrated on the streamed reference, q_r ← q_r + q̇ dt, so a constant actuator offset
-is rejected (the reference drifts until the measured EE is on the path). The reference stays
-within the joint limits and within ``max_lead_rad`` of q_m (anti wind-up). When the arm lags
-(error above ``slow_down_error_m``) the reference time slows down, and stops halfway to
-``max_tracking_error_m``, so a slow or late arm follows the path instead of cutting corners.
+step is integrated on the streamed reference, q_r ← q_r + q̇ dt. The step is computed at the
+predicted arm, q_r + offset (a Smith predictor, :class:`.arm_observer.ArmObserver`: the offset is
+the measured arm minus the reference it was following, found across the round trip), so a
+constant actuator offset is rejected without correcting against a measurement that is a round
+trip old (that loop overshot and oscillated on a loaded machine, #26); x(q_m) in the correction
+above is that prediction, and the tracking error checked is the measured arm against the plan
+at the time the measurement shows. The set-based checks stay on the measured arm. The
+reference stays within the joint limits and within ``max_lead_rad`` of q_m (anti wind-up).
+When the arm lags (error above ``slow_down_error_m``) the reference time slows down, and stops
+halfway to ``max_tracking_error_m``, so a slow or late arm follows the path instead of cutting
+corners.
 
 It stops with :class:`ExecutionStopped` (and a message naming why) when the measured state is
 unusable, a set-based task cannot hold its set (a measured distance at or below the planner's
@@ -37,6 +43,7 @@ import pinocchio as pin
 from jaco2_description.model import ARM_JOINTS, EE_FRAME, Jaco2Model
 from qtree_scene.scene import ObjectSpec
 
+from stpik_motion_planner.arm_observer import ArmObserver
 from stpik_motion_planner.collision import Proximity, SceneWorld
 from stpik_motion_planner.config import PlannerConfig
 from stpik_motion_planner.exceptions import MotionPlannerError
@@ -63,12 +70,9 @@ SETTLE_SPREAD_M = 0.003
 SETTLE_M = 0.02
 
 
-# The streamed reference leads the measured arm (up to max_lead_rad); where it takes the arm is
-# checked against penetration (#29 point 5). The arm goes to the reference plus its actuator
-# offset, which the loop compensates by shifting the reference: the check adds the offset,
-# estimated from measured − streamed joints with this time constant [s] (a sudden lag, the arm
-# held back while the reference runs on, stays in the lead: that is what is checked).
-OFFSET_TIME_CONSTANT_S = 0.5
+# The streamed reference leads the measured arm (up to max_lead_rad); where it takes the arm (the
+# reference plus the arm's offset, :class:`.arm_observer.ArmObserver`) is checked against
+# penetration (#29 point 5).
 REFERENCE_CLEARANCE_M = 0.0  # penetrating, it is a command into an object [m]
 STALL_RATE = 0.05  # reference time advancing slower than this share of real time: stalled
 
@@ -149,7 +153,7 @@ class PlannedMotion:
         self._model = robot.model
         self._data = robot.model.createData()
         self._frame = robot.model.getFrameId(EE_FRAME)
-        self._cache: list[tuple[float, pin.SE3]] = [(np.nan, pin.SE3.Identity())] * 2
+        self._cache: list[tuple[float, pin.SE3]] = [(np.nan, pin.SE3.Identity())] * 4
 
     def joints_at(self, t: float) -> np.ndarray:
         """q_d(t) [rad] (7,), held at the ends."""
@@ -165,13 +169,14 @@ class PlannedMotion:
     def ee_at(self, t: float) -> pin.SE3:
         """x_d(t): the EE pose (world frame) at the planned joints of time ``t`` [s].
 
-        The last two answers are kept: a control tick asks for x_d(t + dt), the next for x_d(t).
+        The last four answers are kept: a control tick asks for x_d(t + dt) and for the plan time
+        its measurement shows, the next tick for x_d(t).
         """
         for cached_t, pose in self._cache:
             if cached_t == t:
                 return pose
         pose = self.ee_of(self.joints_at(t))
-        self._cache = [self._cache[-1], (t, pose)]
+        self._cache = [*self._cache[1:], (t, pose)]
         return pose
 
     def ee_of(self, q: np.ndarray) -> pin.SE3:
@@ -299,7 +304,7 @@ class ClosedLoopController:
         self.worst_error_m = 0.0  # largest EE position error of the segment so far [m]
         self.worst_error_rad = 0.0  # largest EE orientation error of the segment so far [rad]
         self.ticks = 0  # control ticks of the segment so far
-        self._offset = np.zeros(7)  # slow estimate of measured − streamed joints [rad] (7,)
+        self.observer = ArmObserver(c.period)  # latency, offset and predicted arm (#26)
 
     @property
     def plan_time(self) -> float:
@@ -330,6 +335,7 @@ class ClosedLoopController:
         self._motion = motion
         self._t, self._t_end = float(motion.times[start]), float(motion.times[end])
         self.q_ref = np.array(q_ref, dtype=float)
+        self.observer.start(self.q_ref, self._t)
         self.phase = 'tracking'
         self._settle_s = 0.0
         self._settle_window = []
@@ -359,8 +365,13 @@ class ClosedLoopController:
             raise ExecutionStopped('joint_state', f'measured joints must be 7 finite angles: {q}')
         ee_ref = self._motion.ee_at(self._t)
         k = self.stpik.kinematics(q, self.scene)
-        self._check_sets(k)
-        error = pose_error(ee_ref, k.world_ee)
+        self._check_sets(k)  # safety on the measured arm
+        # The tracking error is the arm's deviation from where the plan had it when it was
+        # measured (the round trip of a loaded machine is not an error, #26) ...
+        error = pose_error(self._motion.ee_at(self.observer.measured(q)), k.world_ee)
+        # ... and the step corrects the predicted arm, which has no delay to oscillate on.
+        q_pred = np.clip(self.observer.predicted(self.q_ref), self.stpik.lower, self.stpik.upper)
+        k_pred = self.stpik.kinematics(q_pred, self.scene)
         error_m, error_rad = float(np.linalg.norm(error[:3])), float(np.linalg.norm(error[3:]))
         self.ticks += 1
         self.worst_error_m = max(self.worst_error_m, error_m)
@@ -374,7 +385,7 @@ class ClosedLoopController:
         q_plan = self._motion.joints_at(self._t)
         self.posture_task.reference = q_plan
         self.posture_task.feedforward = self._motion.joints_at(t_next) - q_plan
-        dq, active = self.stpik.solve(k)
+        dq, active = self.stpik.solve(k_pred)
         if error_m > c.max_tracking_error_m or error_rad > c.max_tracking_error_rad:
             raise ExecutionStopped('tracking', self._lost_message(k, error_m, error_rad, active))
         # Stalled while the reference (nearly) stands still; moving again only pays the stall back
@@ -395,12 +406,10 @@ class ClosedLoopController:
             dq /= largest
         q_ref = np.clip(self.q_ref + dq, self.stpik.lower, self.stpik.upper)
         q_ref = np.clip(q_ref, q - c.max_lead_rad, q + c.max_lead_rad)
-        # Where the arm goes: the reference plus the arm's steady offset from what it is sent
-        # (an actuator offset the loop compensates; a lag shows up in it only slowly).
-        alpha = min(1.0, c.period / OFFSET_TIME_CONSTANT_S)
-        self._offset += alpha * ((q - self.q_ref) - self._offset)
-        self._check_reference(q_ref + self._offset)  # up to max_lead_rad ahead (#29)
+        # Where the arm goes: the reference plus the arm's offset from what it is sent.
+        self._check_reference(self.observer.predicted(q_ref))  # up to max_lead_rad ahead (#29)
         self.q_ref = q_ref
+        self.observer.sent(q_ref, t_next)
         plan_time = self._t
         self._advance(t_next, error)
         clearance = min((p.distance for p in k.scene_pairs), default=np.inf)

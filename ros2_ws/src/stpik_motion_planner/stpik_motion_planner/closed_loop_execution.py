@@ -241,7 +241,8 @@ class Execution(TrajectoryExecution):
         c = self._live_controller
         self._node.get_logger().info(
             f'segment to sample {end} {"stopped" if self._stopped else "done"}: {c.ticks} ticks, '
-            f'worst EE error {c.worst_error_m * 1e3:.1f} mm / {c.worst_error_rad:.3f} rad'
+            f'worst EE error {c.worst_error_m * 1e3:.1f} mm / {c.worst_error_rad:.3f} rad, '
+            f'round trip {c.observer.latency_ticks} ticks'
         )
         return self._stopped
 
