@@ -73,17 +73,21 @@ class ArmObserver:
         self.offset = np.zeros(7)
         self.latency_ticks = 0
 
-    def start(self, q_ref: np.ndarray, plan_time: float) -> None:
+    def start(self, q_ref: np.ndarray, plan_time: float, same_motion: bool = True) -> None:
         """A segment starts at reference ``q_ref`` [rad] (7,), plan time ``plan_time`` [s].
 
         The references of the previous segment are kept when it ended on ``q_ref`` (the arm may
         still be following them). Otherwise (the first segment, or a new start after a stop,
         where the arm was held where it was measured) the history restarts at ``q_ref``: the arm
         no longer follows the old references (kept, the way back after a stop was "90.7 mm off"
-        in the node tests while on its path). The offset and the latency statistics are kept.
+        in the node tests while on its path). It restarts too when ``same_motion`` is False:
+        the plan times of another motion mean nothing in this one (the way back after a failed
+        grasp starts where the arm rests, bit for bit the last reference, and was matched with
+        the forward motion's plan times: "636 mm off", every soak run). The offset and the
+        latency statistics are kept.
         """
         q_ref = np.array(q_ref, dtype=float)
-        if self._sent and np.array_equal(self._sent[-1][0], q_ref):
+        if same_motion and self._sent and np.array_equal(self._sent[-1][0], q_ref):
             return
         self._sent.clear()
         self._measured.clear()

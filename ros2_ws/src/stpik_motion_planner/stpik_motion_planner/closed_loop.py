@@ -332,10 +332,11 @@ class ClosedLoopController:
 
     def begin(self, motion: PlannedMotion, start: int, end: int, q_ref: np.ndarray) -> None:
         """Track samples ``start`` to ``end`` of ``motion``; the reference starts at ``q_ref``."""
+        same_motion = motion is self._motion
         self._motion = motion
         self._t, self._t_end = float(motion.times[start]), float(motion.times[end])
         self.q_ref = np.array(q_ref, dtype=float)
-        self.observer.start(self.q_ref, self._t)
+        self.observer.start(self.q_ref, self._t, same_motion)
         self.phase = 'tracking'
         self._settle_s = 0.0
         self._settle_window = []

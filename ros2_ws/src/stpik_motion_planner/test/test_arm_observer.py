@@ -97,3 +97,13 @@ def test_the_next_segment_keeps_the_references_the_arm_still_follows() -> None:
     last_q, last_t = observer._sent[-1]
     observer.start(last_q, last_t)
     assert observer.measured(_references(400)[399 - 1 - 6]) == pytest.approx(shown[-1] + PERIOD)
+
+
+def test_another_motion_starting_on_the_last_reference_forgets_the_old_plan_times() -> None:
+    """The way back after a failed grasp starts where the arm rests, bit for bit the last
+    reference: kept, its first measurement was matched with the forward motion's plan times
+    (636 mm of "tracking error", every run of the soak of 6839f76)."""
+    observer, _ = _observe(2, np.zeros(7))
+    last_q, _ = observer._sent[-1]
+    observer.start(last_q, 0.0, same_motion=False)
+    assert observer.measured(last_q) == 0.0
