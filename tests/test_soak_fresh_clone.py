@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import pathlib
 import subprocess
+import tempfile
 
 import pytest
 from qtree_benchmarks.soak import (
@@ -73,7 +75,18 @@ def test_a_cut_soak_leaves_the_runs_it_finished() -> None:
     assert (tally['runs'], tally['passed'], tally['exit_codes']) == (3, 2, [0, 1, 0])
 
 
-def test_the_worst_tracking_error_is_read_from_every_node_log(tmp_path) -> None:
+def test_the_worst_tracking_error_is_read_from_every_node_log() -> None:
+    # Its fake node logs live outside pytest's session directory: the soak reads every log
+    # under that directory after a run, and a 53.1 mm line written here under ``tmp_path`` was
+    # each run's "worst tracking error" (soak of 1751b84, runs 1-7).
+    with tempfile.TemporaryDirectory() as scratch:
+        root = pathlib.Path(scratch)
+        session = pytest_current_dir().resolve()
+        assert session not in root.resolve().parents
+        _worst_tracking_error_checks(root)
+
+
+def _worst_tracking_error_checks(tmp_path: pathlib.Path) -> None:
     assert worst_tracking_error(tmp_path / 'missing') is None
     (tmp_path / 'a' / 'logs').mkdir(parents=True)
     (tmp_path / 'a' / 'logs' / 'motion_planner_node.log').write_text(
