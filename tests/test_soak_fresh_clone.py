@@ -5,6 +5,7 @@ from __future__ import annotations
 import pathlib
 import subprocess
 import tempfile
+from collections.abc import Iterator
 
 import pytest
 from qtree_benchmarks.soak import (
@@ -75,30 +76,33 @@ def test_a_cut_soak_leaves_the_runs_it_finished() -> None:
     assert (tally['runs'], tally['passed'], tally['exit_codes']) == (3, 2, [0, 1, 0])
 
 
-def test_the_worst_tracking_error_is_read_from_every_node_log() -> None:
-    # Its fake node logs live outside pytest's session directory: the soak reads every log
-    # under that directory after a run, and a 53.1 mm line written here under ``tmp_path`` was
-    # each run's "worst tracking error" (soak of 1751b84, runs 1-7).
+@pytest.fixture
+def outside_session() -> Iterator[pathlib.Path]:
+    """A scratch directory outside pytest's session directory.
+
+    The soak reads every log under that directory after a run: a fake node log written there
+    (a 53.1 mm line under ``tmp_path``) was each run's "worst tracking error" (soak of 1751b84).
+    """
     with tempfile.TemporaryDirectory() as scratch:
         root = pathlib.Path(scratch)
-        session = pytest_current_dir().resolve()
-        assert session not in root.resolve().parents
-        _worst_tracking_error_checks(root)
+        assert pytest_current_dir().resolve() not in root.resolve().parents
+        yield root
 
 
-def _worst_tracking_error_checks(tmp_path: pathlib.Path) -> None:
-    assert worst_tracking_error(tmp_path / 'missing') is None
-    (tmp_path / 'a' / 'logs').mkdir(parents=True)
-    (tmp_path / 'a' / 'logs' / 'motion_planner_node.log').write_text(
+def test_the_worst_tracking_error_is_read_from_every_node_log(outside_session) -> None:
+    root = outside_session
+    assert worst_tracking_error(root / 'missing') is None
+    (root / 'a' / 'logs').mkdir(parents=True)
+    (root / 'a' / 'logs' / 'motion_planner_node.log').write_text(
         '[INFO] segment to sample 40 done: 310 ticks, worst EE error 4.2 mm / 0.031 rad\n'
         '[INFO] segment to sample 61 stopped: 12 ticks, worst EE error 53.1 mm / 0.116 rad\n'
     )
-    (tmp_path / 'b.log').write_text(
+    (root / 'b.log').write_text(
         'segment to sample 9 done: 1 ticks, worst EE error 7.0 mm / 0.2 rad'
     )
-    assert worst_tracking_error(tmp_path) == (53.1, 0.2)
-    (tmp_path / 'c').mkdir()
-    assert worst_tracking_error(tmp_path / 'c') is None
+    assert worst_tracking_error(root) == (53.1, 0.2)
+    (root / 'c').mkdir()
+    assert worst_tracking_error(root / 'c') is None
 
 
 def test_the_node_logs_are_looked_for_where_pytest_puts_them(monkeypatch) -> None:
