@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 from qtree_scene.changes import (
     changed_ids,
@@ -42,7 +43,7 @@ def test_each_kind_of_change_is_named() -> None:
     assert changes == [
         "'O2' changed shape or role",
         "'O4' removed",
-        f"'O5' moved {((0.9 - 0.7) ** 2 + 0.07**2) ** 0.5:.3f} m",
+        f"'O5' moved {math.dist(o5.position[:2], (0.7, 0.0)):.3f} m",
         "'X1' added",
     ]
     assert changed_ids(changes) == ['O2', 'O4', 'O5', 'X1']

@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import pathlib
+
 import numpy as np
 import pytest
 from jaco2_description.model import ARM_JOINTS, HOME
 from qtree_scene.scene import ObjectSpec
 from stpik_motion_planner.verifier import RESOLUTION_M, Carried, TrajectoryVerifier
+
+# Layouts before #31 re-laid S1-S3: the regressions below were measured on them.
+SCENES = pathlib.Path(__file__).parent / 'scenes'
 
 HOME_Q = np.asarray(HOME)
 TABLE = ObjectSpec('table', 'static', 'box', (0.35, 0.0, -0.025), size=(1.2, 1.4, 0.05))
@@ -172,7 +177,7 @@ def test_the_smallest_distance_is_exact_and_the_motion_bounds_are_sound(robot) -
     from stpik_motion_planner.planner import MotionPlanner
     from stpik_motion_planner.verifier import STOP_CLEARANCE_M
 
-    planner = MotionPlanner(load_scenario('s1'), model=robot)
+    planner = MotionPlanner(load_scenario(str(SCENES / 's1_before_31.yaml')), model=robot)
     result = planner.check('O4', [])
     assert result.feasible, result.message
     q = np.asarray(result.joint_trajectory)
