@@ -156,9 +156,11 @@ def test_sim_killed_mid_execution(launch: Any, ros_node: Any) -> None:
     # open loop: 'did not reach sample N: ...', closed loop: 'closed loop stopped: ...'
     assert 'did not reach' in response.message or 'closed loop stopped' in response.message
     assert 'stopped publishing' in response.message
-    # still serving: a feasibility check on the scene it had, and a bad request
+    # still serving: a feasibility check on the scene it had (O2 standing: it blocks O3, the
+    # next object of s1's chain), and a bad request
     again = ros_node.call(client, RelocateObject.Request(object_id='O3'), 30.0)
-    assert again.feasible and again.reason == 0, again.message
+    assert again.reason == RelocateObject.Response.NO_CARTESIAN_PATH, again.message
+    assert list(again.blocking_ids) == ['O2'], again.message
     bad = ros_node.call(client, RelocateObject.Request(object_id='ghost'), 30.0)
     assert bad.reason == RelocateObject.Response.UNKNOWN_OBJECT
     assert mp.alive()

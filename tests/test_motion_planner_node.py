@@ -126,7 +126,8 @@ def test_huge_request_is_answered_logged_and_published_short(graph):
 
 def test_grasp_families_parameter_adds_top_grasps_named_in_the_answer(graph):
     """#30: the paper's side grasp by default (answers name 'side'); with grasp_families
-    ['top', 'side'] the planner, rebuilt, takes O3 of s1 from above and says so."""
+    ['top', 'side'] the planner, rebuilt, takes O4 of s1 from above (O2 blocks its side
+    approaches) and says so."""
     from rclpy.parameter import Parameter
     from rclpy.parameter_client import AsyncParameterClient
 
@@ -135,19 +136,21 @@ def test_grasp_families_parameter_adds_top_grasps_named_in_the_answer(graph):
     assert side.feasible and side.grasp_family == 'side', side.message
     blocked = _call(node, client, 'T')
     assert not blocked.feasible and blocked.grasp_family == ''
+    no_side = _call(node, client, 'O4')
+    assert not no_side.feasible and 'O2' in no_side.blocking_ids, no_side.message
     params = AsyncParameterClient(node, 'motion_planner')
     assert params.wait_for_services(10.0)
     future = params.set_parameters([Parameter('grasp_families', value=['top', 'side'])])
     assert node.spin_until(future.done, 10.0)
     assert all(r.successful for r in future.result().results)
-    top = _call(node, client, 'O3')
+    top = _call(node, client, 'O4')
     assert top.feasible and top.grasp_family == 'top', top.message
     assert 'top grasp' in top.message and not top.from_cache
     assert planner.alive()
 
 
 def test_a_top_grasp_executes_and_stands_the_object_on_its_top_slot(graph):
-    """#30: executed on the simulator, a top grasp of O3 (s1) leaves O3 upright on the first
+    """#30: executed on the simulator, a top grasp of O4 (s1) leaves O4 upright on the first
     top slot (placement.top_place_slots), relocated."""
     from qtree_scene.placement import slot_centre, top_place_slots
     from rclpy.parameter import Parameter
@@ -158,20 +161,20 @@ def test_a_top_grasp_executes_and_stands_the_object_on_its_top_slot(graph):
     assert params.wait_for_services(10.0)
     future = params.set_parameters([Parameter('grasp_families', value=['top'])])
     assert node.spin_until(future.done, 10.0)
-    answer = _call(node, client, 'O3', execute=True, timeout_s=120)
+    answer = _call(node, client, 'O4', execute=True, timeout_s=120)
     assert answer.feasible and answer.grasp_family == 'top', answer.message
 
     def relocated() -> bool:
         scene = state['scene']
         return scene is not None and any(
-            o.id == 'O3' and o.status == ObjectState.STATUS_RELOCATED for o in scene.objects
+            o.id == 'O4' and o.status == ObjectState.STATUS_RELOCATED for o in scene.objects
         )
 
     assert node.spin_until(relocated, 10.0)
     scenario = load_scenario('s1')
     _, top_slots = top_place_slots(scenario)
-    slot = slot_centre(scenario, top_slots[0], scenario.object('O3'))
-    pose = next(o for o in state['scene'].objects if o.id == 'O3').pose
+    slot = slot_centre(scenario, top_slots[0], scenario.object('O4'))
+    pose = next(o for o in state['scene'].objects if o.id == 'O4').pose
     assert abs(pose.position.x - slot[0]) < 0.012 and abs(pose.position.y - slot[1]) < 0.012
     assert abs(pose.position.z - slot[2]) < 0.01  # standing on the table, upright
     assert abs(pose.orientation.x) < 0.05 and abs(pose.orientation.y) < 0.05

@@ -78,8 +78,15 @@ def test_benchmark_reading_preset_sets_the_three_readings() -> None:
     from qtree_benchmarks.cli import benchmark
 
     args = benchmark.parse_args(['--reading', 'paper'])
-    assert (args.hlrnd_rule, args.epsilon_coin, args.steady_episodes) == READINGS['paper']
+    named = (args.hlrnd_rule, args.epsilon_coin, args.steady_episodes, args.steady_rule, args.beta)
+    assert named == READINGS['paper']
     with pytest.raises(SystemExit):
         benchmark.parse_args(['--reading', 'paper', '--steady-episodes', '5'])
+    with pytest.raises(SystemExit):
+        benchmark.parse_args(['--reading', 'paper', '--beta', '0.01'])
+    with pytest.raises(SystemExit):
+        benchmark.parse_args(['--beta', '0'])
+    with pytest.raises(SystemExit):
+        benchmark.parse_args(['--steady-rule', 'folklore'])
     with pytest.raises(SystemExit):
         benchmark.parse_args(['--reading', 'folklore'])

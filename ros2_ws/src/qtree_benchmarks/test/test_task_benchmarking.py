@@ -14,7 +14,7 @@ RESULTS = Path(__file__).resolve().parents[4] / 'benchmarks' / 'results'
 
 def test_variants_blank_what_does_not_apply_and_the_sweep_has_each_setting_once() -> None:
     assert Variant.make('LRND', 'positive-q', 'episode', 1) == Variant('LRND', '-', '-', 1)
-    assert Variant.make('RND', 'positive-q', 'episode', 1) == Variant('RND', '-', '-', 0)
+    assert Variant.make('RND', 'positive-q', 'episode', 1) == Variant('RND', '-', '-', 0, '-', 0.0)
     assert (
         Variant.make('H-LRND', 'positive-q', 'episode', 7).label == 'H-LRND [positive-q, window 7]'
     )
@@ -25,6 +25,22 @@ def test_variants_blank_what_does_not_apply_and_the_sweep_has_each_setting_once(
     assert counts == {'RND': 1, 'LRND': 2, 'H-LRND': 4, 'H-EG': 8}
     assert len({v.label for v in sweep}) == len(sweep)
     assert sum(v.is_default for v in sweep) == 5  # one default row per policy
+    # the steady rule and β of eq. (11) (#31 item 2): one more row per value, not for RND
+    wider = sweep_variants(steady_rules=('no-new-edge', 'q-bar'), betas=(1e-3, 0.05))
+    assert {p: sum(v.policy == p for v in wider) for p in counts} == {
+        'RND': 1, 'LRND': 8, 'H-LRND': 16, 'H-EG': 32,
+    }  # fmt: skip
+    assert sum(v.is_default for v in wider) == 5 and len({v.label for v in wider}) == len(wider)
+    literal = Variant.make('H-EG', 'not-failed', 'step', 1, 'q-bar', 0.05)
+    assert literal.label == 'H-EG [not-failed, coin/step, window 1, q-bar, beta 0.05]'
+    assert literal.training_kwargs()['steady_rule'] == 'q-bar'
+    assert literal.training_kwargs()['beta'] == 0.05
+    old_record = {'policy': 'LRND', 'hlrnd_rule': '-', 'epsilon_coin': '-', 'steady_episodes': 1}
+    assert Variant.of_record(old_record) == Variant.make('LRND', 'not-failed', 'step', 1)
+    with pytest.raises(ValueError, match='steady rule'):
+        Variant.make('H-EG', 'not-failed', 'step', 1, 'folklore')
+    with pytest.raises(ValueError, match='beta'):
+        Variant.make('H-EG', 'not-failed', 'step', 1, 'q-bar', 0.0)
     assert sweep_variants(('H-EG',), (3,)) == [
         Variant('H-EG', r, c, 3) for r in ('not-failed', 'positive-q') for c in ('step', 'episode')
     ]
@@ -63,7 +79,8 @@ def test_committed_markdown_is_what_the_committed_json_gives() -> None:
     meta = data['meta']
     assert meta['trainings'] == 50 and meta['max_episodes'] == 5000 and meta['seed'] == 0
     assert meta['readings'] == {'hlrnd_rule': 'not-failed', 'epsilon_coin': 'step',
-                                'steady_episodes': 50}  # fmt: skip
+                                'steady_episodes': 50, 'steady_rule': 'no-new-edge',
+                                'beta': 0.001}  # fmt: skip
     assert {r['policy'] for r in data['summary']} == {'RND', 'LRND', 'H-LRND', 'H-EG', 'H-EG-SET'}
     rows = summarize(data['records'])
     assert (RESULTS / 'benchmark.md').read_text() == markdown(rows, meta)

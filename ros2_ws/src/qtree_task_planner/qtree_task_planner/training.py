@@ -37,6 +37,10 @@ from qtree_task_planner.rewards import reward
 from qtree_task_planner.tree import QTree
 
 STOP_STEADY = 'steady_state'
+# Readings of the steady state (#31): eq. (11) with no new edge in the episode (default: the
+# paper's prose, "no nodes are added and no edge weights are significantly updated"), or eq. (11)
+# alone (its formula: a new edge whose Q stays 0 leaves Q-bar unchanged).
+STEADY_RULES = ('no-new-edge', 'q-bar')
 STOP_MAX_EPISODES = 'max_episodes'
 STOP_TARGET = 'target_reached'  # RND only
 STOP_CANCELLED = 'cancelled'
@@ -65,6 +69,8 @@ class TrainingConfig:
         hlrnd_rule: H-LRND reading, ``'not-failed'`` (default) or ``'positive-q'``
             (:mod:`qtree_task_planner.policies`).
         epsilon_coin: H-eG coin per ``'step'`` (default) or per ``'episode'``.
+        steady_rule: one of :data:`STEADY_RULES`: ``'no-new-edge'`` (default) or ``'q-bar'``
+            (eq. (11) alone).
     """
 
     policy: str = 'H-EG'
@@ -80,6 +86,7 @@ class TrainingConfig:
     optimal_level: int | None = None
     hlrnd_rule: str = 'not-failed'
     epsilon_coin: str = 'step'
+    steady_rule: str = 'no-new-edge'
 
     def __post_init__(self) -> None:
         """Validate every field.
@@ -99,6 +106,10 @@ class TrainingConfig:
             raise InvalidParameterError('beta', self.beta, 'must be > 0')
         if self.steady_episodes <= 0:
             raise InvalidParameterError('steady_episodes', self.steady_episodes, 'must be > 0')
+        if self.steady_rule not in STEADY_RULES:
+            raise InvalidParameterError(
+                'steady_rule', self.steady_rule, f'must be one of {STEADY_RULES}'
+            )
         if self.time_limit_s is not None and not self.time_limit_s > 0.0:
             raise InvalidParameterError('time_limit_s', self.time_limit_s, 'must be > 0')
 
@@ -307,7 +318,8 @@ class QTreeTrainer(TrainerBase):
             key = edge.child
         if k % 500 == 0:
             tree.recompute_q_bar()
-        steady = new_edges == 0 and abs(tree.q_bar - q_bar_before) <= self.config.beta  # eq. (11)
+        no_growth = new_edges == 0 or self.config.steady_rule == 'q-bar'
+        steady = no_growth and abs(tree.q_bar - q_bar_before) <= self.config.beta  # eq. (11)
         self._steady_count = self._steady_count + 1 if steady else 0
         stats = EpisodeStats(
             episode=k,

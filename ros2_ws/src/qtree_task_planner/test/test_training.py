@@ -205,3 +205,22 @@ def test_unknown_readings_are_rejected() -> None:
         _train('H-LRND', hlrnd_rule='positive')
     with pytest.raises(InvalidParameterError, match='epsilon_coin'):
         _train('H-EG', epsilon_coin='trial')
+    with pytest.raises(InvalidParameterError, match='steady_rule'):
+        _train('H-EG', steady_rule='no-change')
+
+
+def test_the_no_new_edge_rule_binds_only_when_beta_exceeds_one_reward_unit() -> None:
+    """#31 item 2: an episode that adds an edge ends on a new edge of Q = -1 or +100 (a new
+    obstacle edge leads to a new node, whose actions are all untried), so Q-bar (eq. 10) moves
+    by at least 1 and eq. (11) alone already fails for beta < 1: both steady rules train
+    identically. With beta = 1.5, eq. (11) alone (``'q-bar'``) stops on the first episode,
+    the tree still growing; the default waits for an episode without a new edge."""
+    for seed in range(5):
+        _, literal, _ = _train('LRND', seed=seed, steady_episodes=1, steady_rule='q-bar')
+        _, default, _ = _train('LRND', seed=seed, steady_episodes=1)
+        assert (literal.episodes, literal.mp_calls) == (default.episodes, default.mp_calls)
+        _, literal, _ = _train('LRND', seed=seed, steady_episodes=1, steady_rule='q-bar', beta=1.5)
+        _, default, _ = _train('LRND', seed=seed, steady_episodes=1, beta=1.5)
+        assert literal.stop_reason == default.stop_reason == STOP_STEADY
+        assert literal.episodes == 1 and literal.history[-1].new_edges >= 1
+        assert default.episodes > 100 and default.history[-1].new_edges == 0

@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from qtree_task_planner.policies import EPSILON_COINS, HLRND_RULES, POLICY_NAMES
+from qtree_task_planner.training import STEADY_RULES
 
 from qtree_benchmarks.paths import repo_root
 from qtree_benchmarks.task.derive import select
@@ -43,11 +44,15 @@ from qtree_benchmarks.task.report import markdown, sweep_markdown
 from qtree_benchmarks.task.runner import Task, reference, run_all
 from qtree_benchmarks.task.summary import paper_claims, summarize
 from qtree_benchmarks.task.variants import (
+    DEFAULT_BETA,
     DEFAULT_COIN,
     DEFAULT_RULE,
+    DEFAULT_STEADY_RULE,
     DEFAULT_WINDOW,
     READINGS,
+    SWEEP_BETAS,
     SWEEP_POLICIES,
+    SWEEP_STEADY_RULES,
     SWEEP_WINDOWS,
     Variant,
     sweep_variants,
@@ -94,10 +99,20 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help='consecutive episodes eq. (11) must hold',
     )
     parser.add_argument(
+        '--steady-rule',
+        choices=STEADY_RULES,
+        default=DEFAULT_STEADY_RULE,
+        help="eq. (11) with no new edge in the episode ('no-new-edge') or alone ('q-bar')",
+    )
+    parser.add_argument(
+        '--beta', type=float, default=DEFAULT_BETA, help="eq. (11)'s threshold (default 1e-3)"
+    )
+    parser.add_argument(
         '--reading',
         choices=sorted(READINGS),
-        help='a named reading: sets --hlrnd-rule, --epsilon-coin and --steady-episodes '
-        "('paper': the sweep's closest to the paper's tables, see paper_fidelity.md)",
+        help='a named reading: sets --hlrnd-rule, --epsilon-coin, --steady-episodes, '
+        "--steady-rule and --beta ('paper': the sweep's closest to the paper's tables, see "
+        'paper_fidelity.md)',
     )
     parser.add_argument(
         '--paper-sweep',
@@ -111,6 +126,20 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         type=int,
         default=list(SWEEP_WINDOWS),
         help='steady windows of the sweep',
+    )
+    parser.add_argument(
+        '--sweep-steady-rules',
+        nargs='+',
+        choices=STEADY_RULES,
+        default=list(SWEEP_STEADY_RULES),
+        help='steady rules of the sweep',
+    )
+    parser.add_argument(
+        '--sweep-betas',
+        nargs='+',
+        type=float,
+        default=list(SWEEP_BETAS),
+        help='betas of the sweep',
     )
     parser.add_argument('--workers', type=int, default=os.cpu_count() or 1)
     parser.add_argument(
@@ -146,20 +175,34 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     args = parser.parse_args(argv)
     if args.reading:
-        explicit = {'--hlrnd-rule', '--epsilon-coin', '--steady-episodes', '--steady-window'}
+        explicit = {
+            '--hlrnd-rule',
+            '--epsilon-coin',
+            '--steady-episodes',
+            '--steady-window',
+            '--steady-rule',
+            '--beta',
+        }
         if explicit & {a.split('=')[0] for a in (argv if argv is not None else sys.argv[1:])}:
             parser.error('--reading sets the readings: give it or the reading flags, not both')
-        args.hlrnd_rule, args.epsilon_coin, args.steady_episodes = READINGS[args.reading]
+        reading = READINGS[args.reading]
+        args.hlrnd_rule, args.epsilon_coin, args.steady_episodes = reading[:3]
+        args.steady_rule, args.beta = reading[3:]
     if min(args.trainings, args.workers, args.max_episodes, args.steady_episodes) <= 0:
         parser.error('--trainings, --workers, --max-episodes, --steady-episodes must be > 0')
     if min(args.sweep_windows) <= 0:
         parser.error('--sweep-windows must be > 0')
+    if not (args.beta > 0.0 and min(args.sweep_betas) > 0.0):
+        parser.error('--beta and --sweep-betas must be > 0')
     if args.seed < 0:
         parser.error('--seed must be >= 0')
     if args.ros and (args.oracle != 'planner' or args.ray):
         parser.error('--ros uses the real motion planner node; no --oracle synthetic or --ray')
     if args.ros and (
-        args.paper_sweep or args.hlrnd_rule != DEFAULT_RULE or args.epsilon_coin != DEFAULT_COIN
+        args.paper_sweep
+        or args.hlrnd_rule != DEFAULT_RULE
+        or args.epsilon_coin != DEFAULT_COIN
+        or args.steady_rule != DEFAULT_STEADY_RULE
     ):
         parser.error('--ros runs the default readings only (the action has no reading fields)')
     args.tag = args.tag.strip('_') or ('sweep' if args.paper_sweep else '')
@@ -169,10 +212,15 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def variants_of(args: argparse.Namespace) -> list[Variant]:
     """The rows to train: the sweep, or one reading for every policy."""
     if args.paper_sweep:
-        return sweep_variants(tuple(args.policies or SWEEP_POLICIES), tuple(args.sweep_windows))
+        return sweep_variants(
+            tuple(args.policies or SWEEP_POLICIES),
+            tuple(args.sweep_windows),
+            tuple(args.sweep_steady_rules),
+            tuple(args.sweep_betas),
+        )
     policies = args.policies or DEFAULT_POLICIES
-    rule, coin, window = args.hlrnd_rule, args.epsilon_coin, args.steady_episodes
-    return list(dict.fromkeys(Variant.make(p, rule, coin, window) for p in policies))
+    reading = (args.hlrnd_rule, args.epsilon_coin, args.steady_episodes, args.steady_rule)
+    return list(dict.fromkeys(Variant.make(p, *reading, args.beta) for p in policies))
 
 
 def tasks_of(args: argparse.Namespace, variants: list[Variant], meta: dict) -> list[Task]:
@@ -209,13 +257,19 @@ def main(argv: list[str] | None = None) -> int:
             'hlrnd_rule': args.hlrnd_rule,
             'epsilon_coin': args.epsilon_coin,
             'steady_episodes': args.steady_episodes,
+            'steady_rule': args.steady_rule,
+            'beta': args.beta,
         },
         'paper_sweep': args.paper_sweep,
         'workers': args.workers,
         'scenarios': {},
     }
     if args.paper_sweep:
-        meta['readings'] = {'sweep_windows': args.sweep_windows}
+        meta['readings'] = {
+            'sweep_windows': args.sweep_windows,
+            'sweep_steady_rules': args.sweep_steady_rules,
+            'sweep_betas': args.sweep_betas,
+        }
     if args.from_json is not None:
         return write_from_json(args, meta)
     warm, refs = {}, {}

@@ -11,6 +11,7 @@ import numpy as np
 
 from qtree_benchmarks.task.paper import PAPER_XI, paper_text
 from qtree_benchmarks.task.summary import paper_claims
+from qtree_benchmarks.task.variants import DEFAULT_BETA, DEFAULT_STEADY_RULE, Variant
 
 COLUMNS = (
     'episodes to steady state',
@@ -125,7 +126,9 @@ def markdown(rows: list[dict], meta: dict) -> str:
         '',
         _settings(meta),
         f'Readings: H-LRND rule `{readings["hlrnd_rule"]}`, eps coin per '
-        f'`{readings["epsilon_coin"]}`, steady window {readings["steady_episodes"]} episodes '
+        f'`{readings["epsilon_coin"]}`, steady window {readings["steady_episodes"]} episodes, '
+        f'steady rule `{readings.get("steady_rule", DEFAULT_STEADY_RULE)}`, '
+        f'β {readings.get("beta", DEFAULT_BETA):g} '
         '(`scripts/benchmark.py --paper-sweep` shows every reading side by side: '
         '[benchmark_sweep.md](benchmark_sweep.md)).',
         '',
@@ -156,19 +159,25 @@ def sweep_markdown(rows: list[dict], meta: dict) -> str:
         'H-LRND = LRND + target first) or `positive-q` (edges with Q > 0 or untried, all '
         'candidates when none qualifies; also the exploration step of H-εG and H-εG-SET); eps '
         'coin per `step` (default) or per `episode`; steady window: eq. (11) must hold this many '
-        'episodes in a row without a new edge (default 50; 1 is the literal reading). '
+        'episodes in a row (default 50; 1 is the literal reading); steady rule: eq. (11) also '
+        'needs an episode without a new edge (`no-new-edge`, default) or not (`q-bar`); β: '
+        "eq. (11)'s threshold (default 0.001). "
         '★ = the default reading (the committed Tables 1-3, [benchmark.md](benchmark.md)).',
         '',
     ]
-    head = ['policy', 'H-LRND rule', 'eps coin', 'window', *COLUMNS]
+    head = ['policy', 'H-LRND rule', 'eps coin', 'window', 'steady rule', 'β', *COLUMNS]
     for scenario, info in meta['scenarios'].items():
         body = []
         for r in (r for r in rows if r['scenario'] == scenario):
             star = ' ★' if r['default'] else ''
             window = str(r['steady_episodes'] or '-')
+            v = Variant.of_record(r)
+            beta = f'{v.beta:g}' if v.beta else '-'
             body.append([name(r['policy']) + star, r['hlrnd_rule'], r['epsilon_coin'], window,
-                         *metric_cells(r)])  # fmt: skip
-        body.append(['exact set search (BFS, reference)', '-', '-', '-', *exact_cells(info)])
+                         v.steady_rule, beta, *metric_cells(r)])  # fmt: skip
+        body.append(
+            ['exact set search (BFS, reference)', '-', '-', '-', '-', '-', *exact_cells(info)]
+        )
         lines += [scenario_heading(scenario, info), '', *_table(head, body), '']
     claims = paper_claims(rows)
     if claims:
@@ -178,7 +187,8 @@ def sweep_markdown(rows: list[dict], meta: dict) -> str:
             'Means over the trainings of the rows above; ✓ = the claim holds, ✗ = it does not.',
             '',
         ]
-        head = ['scenario', 'H-LRND rule', 'eps coin', 'window', 'episodes LRND / H-LRND / H-εG',
+        head = ['scenario', 'H-LRND rule', 'eps coin', 'window', 'steady rule', 'β',
+                'episodes LRND / H-LRND / H-εG',
                 'MP calls LRND / H-LRND / H-εG', '1st optimal LRND / H-LRND / H-εG',
                 'optimal share LRND / H-LRND / H-εG', 'order Ep', 'order MP', 'Fig. 4',
                 'Fig. 5']  # fmt: skip
@@ -191,7 +201,8 @@ def sweep_markdown(rows: list[dict], meta: dict) -> str:
 
             body.append([
                 c['scenario'].upper() + star, c['hlrnd_rule'], c['epsilon_coin'],
-                str(c['steady_episodes']), slash(c['episodes']), slash(c['mp_calls']),
+                str(c['steady_episodes']), c.get('steady_rule', DEFAULT_STEADY_RULE),
+                f"{c.get('beta', DEFAULT_BETA):g}", slash(c['episodes']), slash(c['mp_calls']),
                 slash(c['first_optimal']), slash(c['optimal_share'], pct=True),
                 *('✓' if c[k] else '✗' for k in ('order_episodes', 'order_mp_calls', 'fig4',
                                                   'fig5')),

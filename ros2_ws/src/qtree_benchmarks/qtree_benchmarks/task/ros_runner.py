@@ -68,6 +68,7 @@ def run_ros(tasks: list[Task], timeout_s: float = 3600.0) -> list[dict]:
                         seed=task.seed,
                         max_episodes=task.max_episodes,
                         steady_episodes=task.steady_episodes,
+                        beta=task.beta,
                     )
                     sent = client.send_goal_async(goal)
                     wait(sent)

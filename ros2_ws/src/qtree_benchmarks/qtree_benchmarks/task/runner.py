@@ -116,11 +116,20 @@ class Task:
     steady_episodes: int = 50
     hlrnd_rule: str = 'not-failed'
     epsilon_coin: str = 'step'
+    steady_rule: str = 'no-new-edge'
+    beta: float = 1e-3
 
     @property
     def variant(self) -> Variant:
         """The task's variant (readings that do not apply blanked)."""
-        return Variant.make(self.policy, self.hlrnd_rule, self.epsilon_coin, self.steady_episodes)
+        return Variant.make(
+            self.policy,
+            self.hlrnd_rule,
+            self.epsilon_coin,
+            self.steady_episodes,
+            self.steady_rule,
+            self.beta,
+        )
 
 
 def run_task(task: Task) -> dict:
@@ -182,6 +191,8 @@ def training_record(task: Task, *, policy: str, sequence: Any, **fields: Any) ->
         'hlrnd_rule': variant.hlrnd_rule,
         'epsilon_coin': variant.epsilon_coin,
         'steady_episodes': variant.steady_episodes,
+        'steady_rule': variant.steady_rule,
+        'beta': variant.beta,
         'seed': task.seed,
         'sequence': list(sequence),
         'level': len(sequence),

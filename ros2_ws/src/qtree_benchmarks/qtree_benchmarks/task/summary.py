@@ -6,6 +6,7 @@ from typing import Any
 
 import numpy as np
 from qtree_task_planner.policies import EPSILON_COINS, HLRND_RULES, POLICY_NAMES
+from qtree_task_planner.training import STEADY_RULES
 
 from qtree_benchmarks.task.paper import PAPER, PAPER_POLICIES
 from qtree_benchmarks.task.variants import NOT_APPLICABLE, Variant
@@ -20,22 +21,17 @@ def mean_std(values: list[float]) -> tuple[float, float]:
 
 
 def _variant_of(record: dict) -> Variant:
-    return Variant(
-        record['policy'],
-        record.get('hlrnd_rule', NOT_APPLICABLE),
-        record.get('epsilon_coin', NOT_APPLICABLE),
-        int(record.get('steady_episodes', 0)),
-    )
+    return Variant.of_record(record)
 
 
 def summarize(records: list[dict]) -> list[dict]:
     """Mean and std per (scenario, variant), in scenario then table order.
 
     Row keys: scenario, policy, variant (label), hlrnd_rule, epsilon_coin, steady_episodes,
-    default, trainings, episodes, mp_calls (tree edges), planner_runs_fresh (real planner runs
-    of one training with a fresh set-cached planner), first_optimal, first_optimal_reached,
-    optimal_share, success_share, converged_share, fallback_share (eq. 19 found none),
-    wall_time_s, paper (Ep, MP, 1st*) or None. Pairs are (mean, std).
+    steady_rule, beta, default, trainings, episodes, mp_calls (tree edges), planner_runs_fresh
+    (real planner runs of one training with a fresh set-cached planner), first_optimal,
+    first_optimal_reached, optimal_share, success_share, converged_share, fallback_share (eq. 19
+    found none), wall_time_s, paper (Ep, MP, 1st*) or None. Pairs are (mean, std).
     """
     groups: dict[tuple[str, Variant], list[dict]] = {}
     for record in records:
@@ -44,8 +40,10 @@ def summarize(records: list[dict]) -> list[dict]:
     def order(key: tuple[str, Variant]) -> tuple:
         scenario, v = key
         rules, coins = (NOT_APPLICABLE, *HLRND_RULES), (NOT_APPLICABLE, *EPSILON_COINS)
+        steady = (NOT_APPLICABLE, *STEADY_RULES)
         return (scenario, POLICY_NAMES.index(v.policy), rules.index(v.hlrnd_rule),
-                coins.index(v.epsilon_coin), -v.steady_episodes)  # fmt: skip
+                coins.index(v.epsilon_coin), -v.steady_episodes, steady.index(v.steady_rule),
+                v.beta)  # fmt: skip
 
     rows = []
     for scenario, variant in sorted(groups, key=order):
@@ -59,6 +57,8 @@ def summarize(records: list[dict]) -> list[dict]:
                 'hlrnd_rule': variant.hlrnd_rule,
                 'epsilon_coin': variant.epsilon_coin,
                 'steady_episodes': variant.steady_episodes,
+                'steady_rule': variant.steady_rule,
+                'beta': variant.beta,
                 'default': variant.is_default,
                 'trainings': len(group),
                 'episodes': mean_std([r['episodes'] for r in group]),
@@ -82,7 +82,8 @@ def _find(rows: list[dict], scenario: str, policy: str, **readings: Any) -> dict
     for row in rows:
         if row['scenario'] != scenario or row['policy'] != policy:
             continue
-        if all(row[k] == v for k, v in readings.items() if row[k] not in (NOT_APPLICABLE, 0)):
+        known = {k: Variant.of_record(row).__getattribute__(k) for k in readings}
+        if all(known[k] == v for k, v in readings.items() if known[k] not in (NOT_APPLICABLE, 0)):
             return row
     return None
 
@@ -101,19 +102,25 @@ def paper_claims(rows: list[dict]) -> list[dict]:
     """
     out = []
     combos = {
-        (r['scenario'], r['hlrnd_rule'], r['epsilon_coin'], r['steady_episodes'])
+        (r['scenario'], v.hlrnd_rule, v.epsilon_coin, v.steady_episodes, v.steady_rule, v.beta)
         for r in rows
         if r['policy'] == 'H-EG'
+        for v in (Variant.of_record(r),)
     }
 
     def order(c: tuple) -> tuple:
-        return c[0], HLRND_RULES.index(c[1]), EPSILON_COINS.index(c[2]), -c[3]
+        return (c[0], HLRND_RULES.index(c[1]), EPSILON_COINS.index(c[2]), -c[3],
+                STEADY_RULES.index(c[4]), c[5])  # fmt: skip
 
-    for scenario, rule, coin, window in sorted(combos, key=order):
-        found = {
-            p: _find(rows, scenario, p, hlrnd_rule=rule, epsilon_coin=coin, steady_episodes=window)
-            for p in PAPER_POLICIES
+    for scenario, rule, coin, window, steady_rule, beta in sorted(combos, key=order):
+        readings = {
+            'hlrnd_rule': rule,
+            'epsilon_coin': coin,
+            'steady_episodes': window,
+            'steady_rule': steady_rule,
+            'beta': beta,
         }
+        found = {p: _find(rows, scenario, p, **readings) for p in PAPER_POLICIES}
         picked = {p: row for p, row in found.items() if row is not None}
         if len(picked) < len(found):
             continue
@@ -122,6 +129,8 @@ def paper_claims(rows: list[dict]) -> list[dict]:
             'hlrnd_rule': rule,
             'epsilon_coin': coin,
             'steady_episodes': window,
+            'steady_rule': steady_rule,
+            'beta': beta,
             'default': all(row['default'] for row in picked.values()),
         }
         for key in ('episodes', 'mp_calls', 'first_optimal'):
