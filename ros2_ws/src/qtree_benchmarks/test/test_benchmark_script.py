@@ -81,3 +81,16 @@ def test_default_tables_from_a_sweep_equal_the_default_command(tmp_path: Path) -
     assert [[r[k] for k in fields] for r in records] == [[r[k] for k in fields] for r in again]
     bad = benchmark.main([*common, '--trainings', '3', '--from-json', str(sweep)])
     assert bad == 2
+
+
+def test_the_json_keeps_one_record_per_line_and_reads_back_equal() -> None:
+    from qtree_benchmarks.cli.benchmark import dumps_with_one_record_per_line
+
+    data = {'meta': {'a': [1, 2]}, 'summary': [{'s': 1.5}], 'records': [{'x': 1}, {'y': 'z'}]}
+    text = dumps_with_one_record_per_line(data)
+    assert json.loads(text) == data
+    assert '{"x":1},\n{"y":"z"}' in text  # one line per record
+    assert json.loads(dumps_with_one_record_per_line({'meta': {}, 'records': []})) == {
+        'meta': {},
+        'records': [],
+    }

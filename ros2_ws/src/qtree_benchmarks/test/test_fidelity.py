@@ -8,27 +8,30 @@ from qtree_benchmarks.task.paper import PAPER
 from qtree_benchmarks.task.variants import READINGS
 
 
-def _row(scenario, policy, rule, coin, window, scale):
+def _row(scenario, policy, rule, coin, window, scale, steady=None):
     episodes, mp_calls, first = PAPER[(scenario, policy)]
-    return {
+    row = {
         'scenario': scenario, 'policy': policy, 'hlrnd_rule': rule, 'epsilon_coin': coin,
         'steady_episodes': window, 'trainings': 50, 'episodes': [episodes * scale, 1.0],
         'mp_calls': [mp_calls * scale, 1.0], 'first_optimal': [first * scale, 1.0],
         'first_optimal_reached': 50,
     }  # fmt: skip
+    if steady is not None:  # rows written before #31 item 2 have no steady rule and beta
+        row['steady_rule'], row['beta'] = steady
+    return row
 
 
-def _sweep(matching: int = 1) -> dict:
+def _sweep(matching: int = 1, steady: tuple | None = None) -> dict:
     """Window ``matching`` matches the paper exactly (x1.0); the other of windows 1 and 50
-    doubles every number (x2.0)."""
+    doubles every number (x2.0). ``steady``: the (steady rule, beta) of every row."""
     rows = []
     for window, scale in ((matching, 1.0), (50 if matching == 1 else 1, 2.0)):
         for s in ('s1', 's2', 's3'):
-            rows.append(_row(s, 'LRND', '-', '-', window, scale))
+            rows.append(_row(s, 'LRND', '-', '-', window, scale, steady))
             for rule in ('not-failed', 'positive-q'):
-                rows.append(_row(s, 'H-LRND', rule, '-', window, scale))
+                rows.append(_row(s, 'H-LRND', rule, '-', window, scale, steady))
                 for coin in ('step', 'episode'):
-                    rows.append(_row(s, 'H-EG', rule, coin, window, scale))
+                    rows.append(_row(s, 'H-EG', rule, coin, window, scale, steady))
     scenes = {
         s: {'level': lv, 'feasible_sequences': xi, 'optimal_sequences': 1}
         for s, lv, xi in (('s1', 4, 10), ('s2', 5, 341), ('s3', 6, 20))
@@ -64,7 +67,8 @@ def test_script_writes_the_report_and_refuses_a_file_that_is_no_sweep(tmp_path) 
     from qtree_benchmarks.cli import paper_fidelity
 
     sweep = tmp_path / 'sweep.json'
-    sweep.write_text(json.dumps(_sweep(READINGS['paper'][2])))  # the preset's window matches
+    preset = READINGS['paper']  # its window matches, every row has its steady rule and beta
+    sweep.write_text(json.dumps(_sweep(preset[2], preset[3:])))
     assert paper_fidelity.main(['--from-json', str(sweep), '--out', str(tmp_path)]) == 0
     report = json.loads((tmp_path / 'paper_fidelity.json').read_text())
     keys = {'scenarios', 'reading', 'cells', 'cells_within_30pct', 'claims'}

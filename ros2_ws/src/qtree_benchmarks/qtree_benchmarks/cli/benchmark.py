@@ -234,7 +234,8 @@ def tasks_of(args: argparse.Namespace, variants: list[Variant], meta: dict) -> l
             meta['scenarios'][name]['level'],
             args.max_episodes,
             args.rnd_time_limit_s,
-            keep_curve=i == 0,
+            # the Q-bar curves plotted; of a sweep only the default's
+            keep_curve=i == 0 and (v.is_default or not args.paper_sweep),
             **{k: val for k, val in v.training_kwargs().items() if k != 'policy'},
         )
         for name in args.scenarios
@@ -313,13 +314,24 @@ def write_from_json(args: argparse.Namespace, meta: dict) -> int:
     return write_outputs(args, meta, records)
 
 
+def dumps_with_one_record_per_line(data: dict) -> str:
+    """JSON of a run: meta, summary and claims indented, each training record on one line (a
+    sweep holds tens of thousands; indented, they made most of a 7 MB file).
+    """
+    head = {k: v for k, v in data.items() if k != 'records'}
+    text = json.dumps(head, indent=1, default=str)
+    lines = [json.dumps(r, default=str, separators=(',', ':')) for r in data['records']]
+    records = '[\n' + ',\n'.join(lines) + '\n ]' if lines else '[]'
+    return text[:-2] + f',\n "records": {records}\n}}\n' if head else f'{{"records": {records}}}\n'
+
+
 def write_outputs(args: argparse.Namespace, meta: dict, records: list[dict]) -> int:
     """Write JSON + Markdown + PNG of a run and print the report; exit code 0."""
     rows = summarize(records)
     args.out.mkdir(parents=True, exist_ok=True)
     stem = f'benchmark_{args.tag}' if args.tag else 'benchmark'
     data = {'meta': meta, 'summary': rows, 'claims': paper_claims(rows), 'records': records}
-    (args.out / f'{stem}.json').write_text(json.dumps(data, indent=1, default=str))
+    (args.out / f'{stem}.json').write_text(dumps_with_one_record_per_line(data))
     report = sweep_markdown(rows, meta) if args.paper_sweep else markdown(rows, meta)
     (args.out / f'{stem}.md').write_text(report)
     prefix = f'{args.tag}_' if args.tag else ''

@@ -8,6 +8,7 @@ import numpy as np
 from qtree_task_planner.policies import POLICY_NAMES
 
 from qtree_benchmarks.task.report import name
+from qtree_benchmarks.task.variants import DEFAULT_BETA, DEFAULT_STEADY_RULE, Variant
 
 
 def _pyplot():
@@ -85,7 +86,15 @@ def sweep_plot(rows: list[dict], out: Path, prefix: str = 'sweep_') -> list[str]
     """
     plt = _pyplot()
     scenarios = sorted({r['scenario'] for r in rows})
-    learners = [r for r in rows if r['policy'] != 'RND']
+    # eq. (11)'s default rule and beta only: with every beta and rule a panel has hundreds of
+    # bars (benchmark_sweep.md lists them all)
+    learners = [
+        r
+        for r in rows
+        if r['policy'] != 'RND'
+        and Variant.of_record(r).steady_rule == DEFAULT_STEADY_RULE
+        and Variant.of_record(r).beta == DEFAULT_BETA
+    ]
     names = []
     for key, title in [
         ('episodes', 'episodes to steady state'),
@@ -109,7 +118,10 @@ def sweep_plot(rows: list[dict], out: Path, prefix: str = 'sweep_') -> list[str]
             ax.set_yticks(y, [name(r['variant']) for r in group], fontsize=7)
             ax.invert_yaxis()
             ax.set_title(f'{scenario.upper()}: {title}')
-        fig.suptitle('Paper sweep (blue = default reading, black tick = the paper)')
+        fig.suptitle(
+            'Paper sweep, eq. (11) with no new edge, beta 0.001 '
+            '(blue = default reading, black tick = the paper)'
+        )
         fig.tight_layout()
         fname = f'{prefix}{key}.png'
         fig.savefig(out / fname, dpi=110)

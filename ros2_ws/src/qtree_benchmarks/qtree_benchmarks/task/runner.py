@@ -187,7 +187,6 @@ def training_record(task: Task, *, policy: str, sequence: Any, **fields: Any) ->
     return {
         'scenario': task.scenario,
         'policy': policy,
-        'variant': variant.label,
         'hlrnd_rule': variant.hlrnd_rule,
         'epsilon_coin': variant.epsilon_coin,
         'steady_episodes': variant.steady_episodes,
