@@ -105,3 +105,11 @@ def test_candidates_start_with_the_layout_and_keep_the_cylinders_apart() -> None
     start = layout.positions()
     moved = {oid for c in shifted[1:] for oid, p in c.positions().items() if p != start[oid]}
     assert moved == set(layout.searched)
+
+
+def test_design_scenarios_refuses_a_search_of_no_candidates(capsys) -> None:
+    from qtree_benchmarks.cli import design_scenarios
+
+    with pytest.raises(SystemExit):
+        design_scenarios.main(['--max-candidates', '0'])
+    assert '--max-candidates: must be at least 1, got 0' in capsys.readouterr().err

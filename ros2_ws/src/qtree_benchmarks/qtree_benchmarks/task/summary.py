@@ -82,7 +82,8 @@ def _find(rows: list[dict], scenario: str, policy: str, **readings: Any) -> dict
     for row in rows:
         if row['scenario'] != scenario or row['policy'] != policy:
             continue
-        known = {k: Variant.of_record(row).__getattribute__(k) for k in readings}
+        variant = Variant.of_record(row)  # rows written before a reading existed: its default
+        known = {k: getattr(variant, k) for k in readings}
         if all(known[k] == v for k, v in readings.items() if known[k] not in (NOT_APPLICABLE, 0)):
             return row
     return None
