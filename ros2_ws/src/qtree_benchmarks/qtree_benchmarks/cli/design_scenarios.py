@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 
 from qtree_scene.scenario import dump_scenario, load_scenario
 from qtree_task_planner.oracle import MotionPlannerOracle
@@ -53,7 +54,7 @@ HEADER = (
 )
 
 
-def derive_with_planner(name: str) -> object:
+def derive_with_planner(name: str) -> Callable[[Layout, int], Derivation]:
     """(layout, seed) -> :class:`Derivation` of scene ``name``'s layout on the real planner."""
     from stpik_motion_planner.config import PlannerConfig
     from stpik_motion_planner.planner import MotionPlanner
@@ -150,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
         found = search(
             LAYOUTS[name],
             wanted,
-            derive_with_planner(name),  # type: ignore[arg-type]
+            derive_with_planner(name),
             seeds=SEEDS,
             max_candidates=args.max_candidates,
             progress=show,

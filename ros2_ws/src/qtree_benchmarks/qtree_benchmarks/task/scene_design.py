@@ -29,7 +29,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from qtree_scene.scene import ObjectSpec, Scenario
+from qtree_scene.scene import ObjectSpec, Role, Scenario
 from qtree_task_planner.exact import count_feasible_sequences, solve_exact
 from qtree_task_planner.oracle import FeasibilityAnswer
 
@@ -155,19 +155,17 @@ def build(layout: Layout, base: Scenario) -> Scenario:
     """``base``'s table, statics and home with ``layout``'s objects."""
     objects = [o for o in base.objects if o.role == 'static']
     x, y = layout.target
-    cylinders = [('T', 'target', x, y, TARGET_HEIGHT)]
+    cylinders: list[tuple[str, Role, float, float, float]] = [('T', 'target', x, y, TARGET_HEIGHT)]
     cylinders += [(oid, 'obstacle', x, y, h) for oid, x, y, h in layout.obstacles]
     for oid, role, x, y, height in cylinders:
         position = (x, y, height / 2)
-        objects.append(
-            ObjectSpec(oid, role, 'cylinder', position, radius=RADIUS, height=height)  # type: ignore[arg-type]
-        )
+        objects.append(ObjectSpec(oid, role, 'cylinder', position, radius=RADIUS, height=height))
     return dataclasses.replace(base, objects=tuple(objects), description=layout.description)
 
 
 def layout_digest(scenario: Scenario) -> str:
-    """SHA-256 of every object's id, role, shape and pose (rounded to 0.1 mm): the answer table's
-    key to the YAML it was derived from.
+    """SHA-256 of every object's id, role, shape, position, radius and height (rounded to
+    0.1 mm): the answer table's key to the YAML it was derived from.
     """
     rows = sorted(
         (o.id, o.role, o.shape, *(round(float(v), 4) for v in (*o.position, o.radius, o.height)))
