@@ -39,7 +39,8 @@ from qtree_task_planner.tree import QTree
 STOP_STEADY = 'steady_state'
 # Readings of the steady state (#31): eq. (11) with no new edge in the episode (default: the
 # paper's prose, "no nodes are added and no edge weights are significantly updated"), or eq. (11)
-# alone (its formula: a new edge whose Q stays 0 leaves Q-bar unchanged).
+# alone (its formula). An episode that adds an edge ends on a new edge of Q = -1 or +100, so for
+# beta < 1 the two part only when an update offsets that change of Q-bar (test_training.py).
 STEADY_RULES = ('no-new-edge', 'q-bar')
 STOP_MAX_EPISODES = 'max_episodes'
 STOP_TARGET = 'target_reached'  # RND only

@@ -209,11 +209,11 @@ def test_unknown_readings_are_rejected() -> None:
         _train('H-EG', steady_rule='no-change')
 
 
-def test_the_no_new_edge_rule_binds_only_when_beta_exceeds_one_reward_unit() -> None:
+def test_the_no_new_edge_rule_changes_nothing_at_the_default_beta_and_binds_above_one() -> None:
     """#31 item 2: an episode that adds an edge ends on a new edge of Q = -1 or +100 (a new
     obstacle edge leads to a new node, whose actions are all untried), so Q-bar (eq. 10) moves
-    by at least 1 and eq. (11) alone already fails for beta < 1: both steady rules train
-    identically. With beta = 1.5, eq. (11) alone (``'q-bar'``) stops on the first episode,
+    by about 1 and eq. (11) alone already fails at the default beta: both steady rules train
+    identically here. With beta = 1.5, eq. (11) alone (``'q-bar'``) stops on the first episode,
     the tree still growing; the default waits for an episode without a new edge."""
     for seed in range(5):
         _, literal, _ = _train('LRND', seed=seed, steady_episodes=1, steady_rule='q-bar')
