@@ -43,7 +43,9 @@ def _sweep(matching: int = 1, steady: tuple | None = None) -> dict:
 
 
 def test_the_reading_that_matches_the_paper_has_every_cell_close() -> None:
-    report = fidelity_report(_sweep(), ('not-failed', 'episode', 1), READINGS['default'])
+    report = fidelity_report(
+        _sweep(), ('not-failed', 'episode', 1, 'no-new-edge', 1e-3), READINGS['default']
+    )
     assert report['cells_total'] == 18 and len(report['cells']) == 18
     assert report['cells_within_30pct'] == 18
     assert all(c['ratio'] == pytest.approx(1.0) for c in report['cells'])

@@ -18,11 +18,10 @@ from typing import Any
 
 from qtree_benchmarks.task.paper import PAPER, PAPER_POLICIES, PAPER_XI
 from qtree_benchmarks.task.variants import (
-    DEFAULT_BETA,
-    DEFAULT_STEADY_RULE,
     EPSILON_COINS,
     HLRND_RULES,
     STEADY_RULES,
+    Reading,
     Variant,
 )
 
@@ -31,14 +30,10 @@ CLOSE = 0.30  # a cell is close to the paper when |ours / paper - 1| <= CLOSE [-
 PAPER_XI_STAR = 1  # optimal sequences of each of the paper's scenes (Sect. 4)
 PAPER_LEVELS = {'s1': 4, 's2': 5, 's3': 6}
 
-# (hlrnd_rule, epsilon_coin, steady_episodes, steady_rule, beta); the old 3-tuples mean the
-# default steady rule and β.
-Reading = tuple[Any, ...]
-
 
 def summary_row(rows: list[dict], scenario: str, policy: str, reading: Reading) -> dict | None:
     """The summary row of ``policy`` on ``scenario`` under ``reading`` (None: not run)."""
-    want = Variant.make(policy, *_full(reading))
+    want = Variant.make(policy, *reading)
     for row in rows:
         if row['scenario'] == scenario and Variant.of_record(row) == want:
             return row
@@ -112,7 +107,7 @@ def optimal_shares(records: list[dict], reading: Reading, scenarios: list[str]) 
     """
     out = []
     for scenario, policy in itertools.product(scenarios, PAPER_POLICIES):
-        want = Variant.make(policy, *_full(reading))
+        want = Variant.make(policy, *reading)
         group = [r for r in records if r['scenario'] == scenario and Variant.of_record(r) == want]
         if not group:
             continue
@@ -198,7 +193,7 @@ def fidelity_report(data: dict, preset: Reading, default: Reading) -> dict:
 
 
 def _named(reading: Reading) -> dict[str, Any]:
-    rule, coin, window, steady_rule, beta = _full(reading)
+    rule, coin, window, steady_rule, beta = reading
     return {
         'hlrnd_rule': rule,
         'epsilon_coin': coin,
@@ -206,14 +201,6 @@ def _named(reading: Reading) -> dict[str, Any]:
         'steady_rule': steady_rule,
         'beta': beta,
     }
-
-
-def _full(reading: Reading) -> tuple[str, str, int, str, float]:
-    """``reading`` with the default steady rule and β when it names only the first three."""
-    rule, coin, window, *rest = reading
-    defaults: list[Any] = [DEFAULT_STEADY_RULE, DEFAULT_BETA]
-    steady_rule, beta = [*rest, *defaults[len(rest) :]]
-    return rule, coin, int(window), steady_rule, float(beta)
 
 
 def markdown(report: dict) -> str:

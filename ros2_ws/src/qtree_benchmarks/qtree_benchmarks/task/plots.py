@@ -88,12 +88,12 @@ def sweep_plot(rows: list[dict], out: Path, prefix: str = 'sweep_') -> list[str]
     scenarios = sorted({r['scenario'] for r in rows})
     # eq. (11)'s default rule and beta only: with every beta and rule a panel has hundreds of
     # bars (benchmark_sweep.md lists them all)
+    default_test = (DEFAULT_STEADY_RULE, DEFAULT_BETA)
     learners = [
         r
         for r in rows
-        if r['policy'] != 'RND'
-        and Variant.of_record(r).steady_rule == DEFAULT_STEADY_RULE
-        and Variant.of_record(r).beta == DEFAULT_BETA
+        for v in (Variant.of_record(r),)
+        if r['policy'] != 'RND' and (v.steady_rule, v.beta) == default_test
     ]
     names = []
     for key, title in [

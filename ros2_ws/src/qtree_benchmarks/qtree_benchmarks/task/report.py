@@ -11,7 +11,7 @@ import numpy as np
 
 from qtree_benchmarks.task.paper import PAPER_XI, paper_text
 from qtree_benchmarks.task.summary import paper_claims
-from qtree_benchmarks.task.variants import DEFAULT_BETA, DEFAULT_STEADY_RULE, Variant
+from qtree_benchmarks.task.variants import Variant
 
 COLUMNS = (
     'episodes to steady state',
@@ -127,8 +127,7 @@ def markdown(rows: list[dict], meta: dict) -> str:
         _settings(meta),
         f'Readings: H-LRND rule `{readings["hlrnd_rule"]}`, eps coin per '
         f'`{readings["epsilon_coin"]}`, steady window {readings["steady_episodes"]} episodes, '
-        f'steady rule `{readings.get("steady_rule", DEFAULT_STEADY_RULE)}`, '
-        f'β {readings.get("beta", DEFAULT_BETA):g} '
+        f'steady rule `{readings["steady_rule"]}`, β {readings["beta"]:g} '
         '(`scripts/benchmark.py --paper-sweep` shows every reading side by side: '
         '[benchmark_sweep.md](benchmark_sweep.md)).',
         '',
@@ -201,8 +200,8 @@ def sweep_markdown(rows: list[dict], meta: dict) -> str:
 
             body.append([
                 c['scenario'].upper() + star, c['hlrnd_rule'], c['epsilon_coin'],
-                str(c['steady_episodes']), c.get('steady_rule', DEFAULT_STEADY_RULE),
-                f"{c.get('beta', DEFAULT_BETA):g}", slash(c['episodes']), slash(c['mp_calls']),
+                str(c['steady_episodes']), c['steady_rule'], f"{c['beta']:g}",
+                slash(c['episodes']), slash(c['mp_calls']),
                 slash(c['first_optimal']), slash(c['optimal_share'], pct=True),
                 *('✓' if c[k] else '✗' for k in ('order_episodes', 'order_mp_calls', 'fig4',
                                                   'fig5')),

@@ -31,7 +31,7 @@ from typing import Any
 
 from qtree_scene.scene import ObjectSpec, Role, Scenario
 from qtree_task_planner.exact import count_feasible_sequences, solve_exact
-from qtree_task_planner.oracle import FeasibilityAnswer
+from qtree_task_planner.oracle import FeasibilityAnswer, FeasibilityOracle, MemoOracle
 
 # The paper's scenes: (optimal level with the target, ξ_p, ξ*) (Sect. 4).
 PAPER_DIFFICULTY: dict[str, tuple[int, int, int]] = {
@@ -223,25 +223,6 @@ class Derivation:
         return self.level, self.xi_p, self.xi_star
 
 
-class RecordingOracle:
-    """Wraps an oracle and records the feasibility of every (set, object) it answers."""
-
-    def __init__(self, inner: object) -> None:
-        self.inner = inner
-        self.answers: dict[AnswerKey, bool] = {}
-
-    def feasible(self, relocated: tuple[str, ...], object_id: str) -> bool:
-        """The inner oracle's answer, recorded."""
-        answer = bool(self.inner.feasible(relocated, object_id))  # type: ignore[attr-defined]
-        self.answers[(tuple(sorted(relocated)), object_id)] = answer
-        return answer
-
-    @property
-    def planner_runs(self) -> int:
-        """The inner oracle's real planner runs."""
-        return int(getattr(self.inner, 'planner_runs', 0))
-
-
 class ReplayOracle:
     """Answers from a recorded table only; a question the table lacks is an error, never a guess.
 
@@ -269,14 +250,14 @@ class ReplayOracle:
         return FeasibilityAnswer(self.feasible(relocated, object_id), None)
 
 
-def derive(scenario: Scenario, oracle: object, seed: int = 0) -> Derivation:
+def derive(scenario: Scenario, oracle: FeasibilityOracle, seed: int = 0) -> Derivation:
     """Exact optimal level and sequence counts of ``scenario`` with ``oracle`` answering."""
-    recording = RecordingOracle(oracle)
+    memo = MemoOracle(oracle)  # its results: every (set, object) asked, with the answer
     obstacles = tuple(o.id for o in scenario.obstacles)
     target = scenario.target.id
     start = time.perf_counter()
-    exact = solve_exact(obstacles, target, recording)
-    counts = count_feasible_sequences(obstacles, target, recording)
+    exact = solve_exact(obstacles, target, memo)
+    counts = count_feasible_sequences(obstacles, target, memo)
     return Derivation(
         seed=seed,
         level=exact.level,
@@ -284,8 +265,8 @@ def derive(scenario: Scenario, oracle: object, seed: int = 0) -> Derivation:
         xi_p=counts.feasible,
         xi_star=counts.optimal,
         by_level=dict(counts.by_level),
-        answers=recording.answers,
-        planner_runs=recording.planner_runs,
+        answers={(tuple(sorted(r)), o): f for (r, o), f in memo.results.items()},
+        planner_runs=memo.planner_runs,
         seconds=round(time.perf_counter() - start, 2),
     )
 

@@ -20,10 +20,6 @@ def mean_std(values: list[float]) -> tuple[float, float]:
     return float(array.mean()), float(array.std())
 
 
-def _variant_of(record: dict) -> Variant:
-    return Variant.of_record(record)
-
-
 def summarize(records: list[dict]) -> list[dict]:
     """Mean and std per (scenario, variant), in scenario then table order.
 
@@ -35,7 +31,7 @@ def summarize(records: list[dict]) -> list[dict]:
     """
     groups: dict[tuple[str, Variant], list[dict]] = {}
     for record in records:
-        groups.setdefault((record['scenario'], _variant_of(record)), []).append(record)
+        groups.setdefault((record['scenario'], Variant.of_record(record)), []).append(record)
 
     def order(key: tuple[str, Variant]) -> tuple:
         scenario, v = key
@@ -127,11 +123,7 @@ def paper_claims(rows: list[dict]) -> list[dict]:
             continue
         claim: dict[str, Any] = {
             'scenario': scenario,
-            'hlrnd_rule': rule,
-            'epsilon_coin': coin,
-            'steady_episodes': window,
-            'steady_rule': steady_rule,
-            'beta': beta,
+            **readings,
             'default': all(row['default'] for row in picked.values()),
         }
         for key in ('episodes', 'mp_calls', 'first_optimal'):
