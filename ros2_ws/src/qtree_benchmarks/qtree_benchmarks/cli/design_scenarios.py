@@ -23,6 +23,7 @@ import sys
 from collections.abc import Callable
 
 from qtree_scene.scenario import dump_scenario, load_scenario
+from qtree_scene.scene import Scenario
 from qtree_task_planner.oracle import MotionPlannerOracle
 
 from qtree_benchmarks.paths import repo_root
@@ -70,10 +71,9 @@ def derive_with_planner(name: str) -> Callable[[Layout, int], Derivation]:
     return run
 
 
-def report(name: str, found: Found) -> dict[str, object]:
-    """The JSON record of one accepted scene."""
+def report(name: str, found: Found, scenario: Scenario) -> dict[str, object]:
+    """The JSON record of one accepted scene (``scenario``: its layout built)."""
     first = found.derivations[0]
-    scenario = build(found.layout, load_scenario(name))
     return {
         'level': first.level,
         'xi_p': first.xi_p,
@@ -159,10 +159,10 @@ def main(argv: list[str] | None = None) -> int:
         if found is None:
             print(f'{name}: no layout of {args.max_candidates} gives {wanted} under seeds {SEEDS}')
             return 1
-        records[name] = report(name, found)
+        scenario = build(found.layout, load_scenario(name))
+        records[name] = report(name, found, scenario)
         print(f'{name}: accepted candidate {found.tried - 1}: {wanted}, {found.derivations[0]}')
         if args.write:
-            scenario = build(found.layout, load_scenario(name))
             text = HEADER.format(description=scenario.description) + dump_scenario(scenario)
             (SCENARIO_DIR / f'{name}.yaml').write_text(text)
     if args.write:
